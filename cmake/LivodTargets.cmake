@@ -1,0 +1,81 @@
+# Shared compile settings and helpers for livod targets.
+
+add_library(livod_warnings INTERFACE)
+target_compile_options(livod_warnings INTERFACE
+  -Wall -Wextra -Wshadow -Wnon-virtual-dtor -Wcast-align -Woverloaded-virtual
+  -Wimplicit-fallthrough)
+if(LIVOD_WERROR)
+  target_compile_options(livod_warnings INTERFACE -Werror)
+endif()
+
+if(LIVOD_BUILD_FUZZ)
+  # Coverage instrumentation for every library; the fuzz targets add the libFuzzer main.
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer -g)
+  add_link_options(-fsanitize=address,undefined)
+elseif(LIVOD_SANITIZE)
+  add_compile_options(-fsanitize=${LIVOD_SANITIZE} -fno-omit-frame-pointer -g)
+  add_link_options(-fsanitize=${LIVOD_SANITIZE})
+  if(LIVOD_SANITIZE MATCHES "undefined")
+    add_compile_options(-fno-sanitize-recover=undefined)
+  endif()
+endif()
+
+# livod_add_library(NAME SOURCES ... [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
+# The include root is the repository root, so headers are included as "core/ring.hpp".
+function(livod_add_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
+  add_library(${name} STATIC ${ARG_SOURCES})
+  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/generated)
+  target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LIBS} PRIVATE livod_warnings ${ARG_PRIVATE_LIBS})
+endfunction()
+
+# livod_add_test(NAME SOURCES ... LIBS ... [LABELS ...])
+# Tests find the real captures through LIVOD_DATA_DIR (environment overrides the build default).
+function(livod_add_test name)
+  if(NOT LIVOD_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} livod_test_support GTest::gtest GTest::gtest_main
+                                        livod_warnings)
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 120
+    PROPERTIES LABELS "${ARG_LABELS}" ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR}")
+endfunction()
+
+# livod_glob_library(NAME DIR [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
+# Every .cpp under DIR (recursively) except tests/ and fuzz/ subfolders belongs to the library, so
+# adding a module file needs no CMake edit.
+function(livod_glob_library name dir)
+  cmake_parse_arguments(ARG "" "" "PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
+  file(GLOB_RECURSE srcs CONFIGURE_DEPENDS ${dir}/*.cpp)
+  list(FILTER srcs EXCLUDE REGEX "/(tests|fuzz|bench)/")
+  if(NOT srcs)
+    add_library(${name} INTERFACE)
+    target_include_directories(${name} INTERFACE ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/generated)
+    target_link_libraries(${name} INTERFACE ${ARG_PUBLIC_LIBS})
+    return()
+  endif()
+  livod_add_library(${name} SOURCES ${srcs} PUBLIC_LIBS ${ARG_PUBLIC_LIBS} PRIVATE_LIBS ${ARG_PRIVATE_LIBS})
+endfunction()
+
+# livod_glob_tests(PREFIX DIR LIBS ...): one test executable per DIR/*_test.cpp, named
+# PREFIX_<file stem>. Tests whose stem ends in _threads_test also get the label "threads" (the
+# TSan CI job runs those).
+function(livod_glob_tests prefix dir)
+  if(NOT LIVOD_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "LIBS" ${ARGN})
+  file(GLOB tests CONFIGURE_DEPENDS ${dir}/*_test.cpp)
+  foreach(t ${tests})
+    get_filename_component(stem ${t} NAME_WE)
+    set(labels unit)
+    if(stem MATCHES "_threads_test$")
+      list(APPEND labels threads)
+      set_property(GLOBAL APPEND PROPERTY LIVOD_THREADS_TESTS ${prefix}_${stem})
+    endif()
+    livod_add_test(${prefix}_${stem} SOURCES ${t} LIBS ${ARG_LIBS} LABELS ${labels})
+  endforeach()
+endfunction()

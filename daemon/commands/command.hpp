@@ -1,0 +1,19 @@
+#pragma once
+// Subcommands of the single `livod` binary. Each add_*_command() registers one subcommand on the
+// root app; its callback stores the process exit code in the context. A subcommand exists only
+// when it works end to end (no "not implemented" paths).
+
+namespace CLI {
+class App;
+}
+
+namespace livod::daemon {
+
+struct CommandContext {
+  int exit_code = 0;
+};
+
+void add_version_command(CLI::App& app, CommandContext& ctx);
+// COMMAND-DECLARATIONS (one line per subcommand; keep sorted)
+
+}  // namespace livod::daemon

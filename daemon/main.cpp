@@ -1,0 +1,38 @@
+// livod: one binary, subcommands for live operation, replay, decoding, simulation and tools.
+
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <fmt/core.h>
+
+#include "daemon/commands/command.hpp"
+#include "daemon/logging.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"livod - LiDAR-inertial-visual odometry daemon"};
+  app.require_subcommand(1);
+  livod::daemon::LoggingConfig log_config;
+  app.add_option("--log-level", log_config.level, "trace|debug|info|warn|error|critical|off")
+      ->capture_default_str();
+
+  livod::daemon::CommandContext ctx;
+  livod::daemon::add_version_command(app, ctx);
+  // COMMAND-REGISTRATIONS (one line per subcommand; keep sorted)
+
+  app.parse_complete_callback([&log_config] {
+    if (!livod::daemon::init_logging(log_config)) {
+      fmt::print(stderr, "livod: unknown log level '{}', using info\n", log_config.level);
+    }
+  });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    livod::daemon::shutdown_logging();
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "livod: error: {}\n", e.what());
+    livod::daemon::shutdown_logging();
+    return 1;
+  }
+  livod::daemon::shutdown_logging();
+  return ctx.exit_code;
+}

@@ -1,0 +1,18 @@
+#pragma once
+// Where tests find the real recorded data (../shared/data). The environment variable
+// LIVOD_DATA_DIR wins over the build-time default, so a test binary can be run from anywhere.
+
+#include <filesystem>
+#include <string>
+
+namespace livod::test {
+
+std::filesystem::path data_dir();
+
+// data_dir() / relative; fails the current test (GTEST_SKIP is not used: missing data is an error).
+std::filesystem::path data_path(const std::string& relative);
+
+// A fresh empty directory under the system temp dir, removed when the process exits normally.
+std::filesystem::path temp_dir(const std::string& name);
+
+}  // namespace livod::test
