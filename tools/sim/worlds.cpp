@@ -1,0 +1,130 @@
+#include "tools/sim/worlds.hpp"
+
+#include <random>
+
+namespace livod::sim {
+namespace {
+
+Surface surface(float reflectivity, float texture_scale, std::uint32_t seed,
+                float contrast = 0.35F) {
+  Surface s;
+  s.reflectivity = reflectivity;
+  s.texture_scale = texture_scale;
+  s.texture_seed = seed;
+  s.texture_contrast = contrast;
+  return s;
+}
+
+}  // namespace
+
+World make_room_world(std::uint64_t seed) {
+  World w;
+  constexpr double kHalfX = 6.0;
+  constexpr double kHalfY = 4.5;
+  constexpr double kHeight = 3.0;
+  constexpr double kWall = 0.1;
+  // Floor, ceiling and walls as thin slabs (their inner faces are what sensors see).
+  w.add_box({0, 0, -kWall}, {kHalfX + kWall, kHalfY + kWall, kWall}, 0.0, surface(0.3F, 2.0F, 1));
+  w.add_box({0, 0, kHeight + kWall}, {kHalfX + kWall, kHalfY + kWall, kWall}, 0.0,
+            surface(0.6F, 1.5F, 2));
+  w.add_box({kHalfX + kWall, 0, kHeight / 2}, {kWall, kHalfY + kWall, kHeight / 2}, 0.0,
+            surface(0.5F, 1.7F, 3));
+  w.add_box({-kHalfX - kWall, 0, kHeight / 2}, {kWall, kHalfY + kWall, kHeight / 2}, 0.0,
+            surface(0.5F, 1.7F, 4));
+  w.add_box({0, kHalfY + kWall, kHeight / 2}, {kHalfX + kWall, kWall, kHeight / 2}, 0.0,
+            surface(0.45F, 1.9F, 5));
+  w.add_box({0, -kHalfY - kWall, kHeight / 2}, {kHalfX + kWall, kWall, kHeight / 2}, 0.0,
+            surface(0.45F, 1.9F, 6));
+
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // Furniture in a ring between 3.2 m from the centre and the walls.
+  int placed = 0;
+  for (int attempt = 0; attempt < 400 && placed < 18; ++attempt) {
+    const double hx = 0.2 + 0.6 * unit(rng);
+    const double hy = 0.2 + 0.6 * unit(rng);
+    const double hz = 0.2 + 0.8 * unit(rng);
+    const double x = (kHalfX - hx - 0.05) * (2 * unit(rng) - 1);
+    const double y = (kHalfY - hy - 0.05) * (2 * unit(rng) - 1);
+    if (std::abs(x) < 3.2 + hx && std::abs(y) < 2.4 + hy) continue;  // keep the centre free
+    const double yaw = 0.8 * (unit(rng) - 0.5);
+    w.add_box({x, y, hz}, {hx, hy, hz}, yaw,
+              surface(static_cast<float>(0.2 + 0.7 * unit(rng)), 3.0F,
+                      100U + static_cast<std::uint32_t>(placed)));
+    ++placed;
+  }
+  w.add_cylinder({4.5, 3.2, 0.0}, 0.25, kHeight, surface(0.7F, 4.0F, 60));
+  w.add_cylinder({-4.6, -3.1, 0.0}, 0.2, kHeight, surface(0.7F, 4.0F, 61));
+  // A few wall-mounted boxes (shelves, frames) break the walls' symmetry.
+  w.add_box({kHalfX - 0.15, -1.0, 1.6}, {0.15, 0.8, 0.4}, 0.0, surface(0.8F, 5.0F, 70));
+  w.add_box({-1.5, kHalfY - 0.1, 2.0}, {0.9, 0.1, 0.5}, 0.0, surface(0.9F, 5.0F, 71));
+  w.add_box({2.0, -kHalfY + 0.2, 1.2}, {0.6, 0.2, 1.2}, 0.0, surface(0.35F, 3.0F, 72));
+  w.build();
+  return w;
+}
+
+World make_corridor_world() {
+  World w;
+  constexpr double kStart = -5.0;
+  constexpr double kLength = 80.0;
+  constexpr double kHalfWidth = 1.2;
+  constexpr double kHeight = 3.0;
+  constexpr double kWall = 0.1;
+  const double cx = kStart + kLength / 2;
+  const double hx = kLength / 2 + kWall;
+  // Uniform walls: no geometric feature along x. (The texture still lets a camera see motion.)
+  w.add_box({cx, 0, -kWall}, {hx, kHalfWidth + kWall, kWall}, 0.0, surface(0.3F, 2.0F, 11));
+  w.add_box({cx, 0, kHeight + kWall}, {hx, kHalfWidth + kWall, kWall}, 0.0,
+            surface(0.6F, 2.0F, 12));
+  w.add_box({cx, kHalfWidth + kWall, kHeight / 2}, {hx, kWall, kHeight / 2}, 0.0,
+            surface(0.5F, 2.0F, 13));
+  w.add_box({cx, -kHalfWidth - kWall, kHeight / 2}, {hx, kWall, kHeight / 2}, 0.0,
+            surface(0.5F, 2.0F, 14));
+  w.build();
+  return w;
+}
+
+World make_street_world(std::uint64_t seed, double length) {
+  World w;
+  constexpr double kStart = -20.0;
+  constexpr double kHalfRoad = 7.0;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double end = kStart + length;
+  // Ground (road and pavements) as one wide slab.
+  w.add_box({kStart + length / 2, 0, -0.2}, {length / 2 + 50, 60.0, 0.2}, 0.0,
+            surface(0.25F, 1.0F, 21));
+  // Buildings on both sides, with gaps and varied setbacks and heights.
+  for (const double side : {-1.0, 1.0}) {
+    double x = kStart - 10.0;
+    std::uint32_t id = side > 0 ? 1000 : 2000;
+    while (x < end + 10.0) {
+      const double width = 8.0 + 17.0 * unit(rng);
+      const double depth = 8.0 + 6.0 * unit(rng);
+      const double height = 6.0 + 24.0 * unit(rng);
+      const double setback = kHalfRoad + 3.0 + 4.0 * unit(rng);
+      const double yaw = 0.06 * (unit(rng) - 0.5);
+      w.add_box({x + width / 2, side * (setback + depth / 2), height / 2},
+                {width / 2, depth / 2, height / 2}, yaw,
+                surface(static_cast<float>(0.2 + 0.6 * unit(rng)), 0.8F, id++));
+      x += width + (unit(rng) < 0.3 ? 3.0 + 6.0 * unit(rng) : 0.5);
+    }
+  }
+  // Street poles every 25 m on both kerbs, and trees between them.
+  std::uint32_t id = 5000;
+  for (double x = kStart; x < end; x += 25.0) {
+    for (const double side : {-1.0, 1.0}) {
+      w.add_cylinder({x + 3.0 * unit(rng), side * (kHalfRoad + 0.5), 0.0}, 0.1, 6.0,
+                     surface(0.8F, 6.0F, id++));
+      const double tx = x + 12.5 + 2.0 * (unit(rng) - 0.5);
+      const double ty = side * (kHalfRoad + 1.5);
+      const double trunk = 2.0 + unit(rng);
+      w.add_cylinder({tx, ty, 0.0}, 0.15, trunk, surface(0.4F, 5.0F, id++));
+      w.add_sphere({tx, ty, trunk + 1.2}, 1.3 + 0.5 * unit(rng), surface(0.35F, 4.0F, id++));
+    }
+  }
+  w.build();
+  return w;
+}
+
+}  // namespace livod::sim
