@@ -1,0 +1,85 @@
+#pragma once
+// The interface every simulated sensor implements. A simulated sensor follows the body along the
+// trajectory (rigidly mounted with T_body_sensor), samples the world along its real firing
+// schedule and timing, and emits what the real sensor puts on the wire (UDP payloads, CAN frames)
+// with sensor-clock stamps, delivered at host receive times through a faulty link.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "tools/sim/sensor_clock.hpp"
+#include "tools/sim/trajectory.hpp"
+#include "tools/sim/world.hpp"
+
+namespace livod::sim {
+
+// What a simulated LiDAR needs to sample the scene.
+struct SceneContext {
+  const World* world = nullptr;
+  const Trajectory* trajectory = nullptr;
+  Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d gravity_world{0.0, 0.0, -9.81};
+
+  [[nodiscard]] Eigen::Isometry3d T_world_sensor(double t) const {
+    return trajectory->at(t).T_world_body() * T_body_sensor;
+  }
+};
+
+// Range measurement model shared by the LiDAR models.
+struct RangeModel {
+  double sigma_m = 0.01;  // Gaussian range noise (1 sigma)
+  double dropout_probability = 0.002;
+  double min_range_m = 0.3;
+  double max_range_m = 120.0;
+  double reflectivity_gain = 255.0;  // reflectivity 0..1 -> sensor units
+};
+
+// One UDP datagram as the host receives it.
+struct SimDatagram {
+  std::int64_t host_time_ns = 0;  // receive time on the host clock (pcap record time)
+  std::uint32_t src_ip = 0;
+  std::uint16_t src_port = 0;
+  std::uint16_t dst_port = 0;
+  std::vector<std::byte> payload;
+};
+
+// The exact point a LiDAR model measured, before encoding: decoders must give it back (within
+// the wire format's quantisation). Expressed in the sensor frame.
+struct SimPointTruth {
+  double t = 0.0;  // scenario time of the firing
+  Eigen::Vector3d p_sensor = Eigen::Vector3d::Zero();
+  float reflectivity = 0.0F;
+  std::uint16_t ring = 0;
+  bool valid = false;  // false: no return (dropout, out of range, sky)
+};
+
+struct SimImuTruth {
+  double t = 0.0;
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();
+};
+
+struct SimOutputs {
+  std::function<void(SimDatagram&&)> on_datagram;      // required
+  std::function<void(const SimPointTruth&)> on_point;  // optional (tests)
+  std::function<void(const SimImuTruth&)> on_imu;      // optional (tests)
+};
+
+class SimLidar {
+ public:
+  virtual ~SimLidar() = default;
+  [[nodiscard]] virtual std::string model() const = 0;  // as `livod decode --model` spells it
+  // Simulates [t_begin, t_end) of scenario time. Called once per sequence (or in consecutive
+  // chunks; the model keeps its own packet counters between calls).
+  virtual void run(double t_begin, double t_end, const SceneContext& scene, SimOutputs& out) = 0;
+  // Files the decoder needs beside the capture (e.g. Ouster metadata JSON). Returns their paths.
+  virtual std::vector<std::filesystem::path> write_side_files(const std::filesystem::path& dir,
+                                                              const std::string& stem) const = 0;
+};
+
+}  // namespace livod::sim
