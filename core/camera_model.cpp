@@ -133,6 +133,15 @@ std::optional<Eigen::Vector3d> CameraModel::unproject(const Eigen::Vector2d& pix
     if (std::abs(step) < 1e-15) break;
   }
   if (!(theta >= 0.0 && theta < M_PI)) return std::nullopt;
+  {
+    // Past the lens's valid field of view the polynomial folds back (d theta_d / d theta <= 0) and
+    // Newton can land on the wrong branch: reject instead of returning a wrong ray.
+    const double t2 = theta * theta;
+    const double f = theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])))) - theta_d;
+    const double df =
+        1.0 + t2 * (3.0 * k[0] + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])));
+    if (std::abs(f) > 1e-9 || df <= 0.0) return std::nullopt;
+  }
   const Eigen::Vector2d dir = d / theta_d;
   return Eigen::Vector3d(std::sin(theta) * dir.x(), std::sin(theta) * dir.y(), std::cos(theta));
 }
