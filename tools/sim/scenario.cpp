@@ -1,0 +1,266 @@
+#include "tools/sim/scenario.hpp"
+
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace livod::sim {
+namespace {
+
+Eigen::Isometry3d make_pose(const Eigen::Vector3d& t, const Eigen::Matrix3d& R) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = t;
+  return T;
+}
+
+Eigen::Matrix3d rpy(double roll, double pitch, double yaw) {
+  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+// A forward-looking camera: camera z = body x, camera x = -body y, camera y = -body z.
+Eigen::Matrix3d R_body_forward_cam() {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return R;
+}
+
+// FAST-LIVO2's Avia rig camera (MV-CA013, 1280x1024) at its scale 0.5: 640x512.
+CameraMount rig_camera() {
+  CameraMount cam;
+  auto& k = cam.params.intrinsics;
+  k.model = CameraIntrinsics::Model::kPinholeRadtan;
+  k.width = 1280;
+  k.height = 1024;
+  k.fx = 1293.57;
+  k.fy = 1293.32;
+  k.cx = 626.91;
+  k.cy = 522.80;
+  k.distortion = {-0.07616, 0.123001, -0.00113, 0.000251};
+  k = k.scaled(0.5);
+  // Wider than the real lens so that a room is seen with enough structure: 640 px / 500 px focal.
+  k.fx = 500.0;
+  k.fy = 500.0;
+  cam.params.rate_hz = 10.0;
+  cam.T_body_cam = make_pose({0.06, 0.0, 0.04}, R_body_forward_cam());
+  return cam;
+}
+
+// Handheld walk around the free centre of the room: 0.6 m/s on an ellipse, steps at 1.8 Hz.
+TrajectorySpec handheld_room() {
+  TrajectorySpec s;
+  s.x = {0.0, 0.0, {{2.0, 0.32, 0.0}}};
+  s.y = {-1.4, 0.0, {{1.4, 0.32, M_PI / 2}}};
+  s.z = {1.35, 0.0, {{0.035, 11.3, 0.0}, {0.06, 0.7, 1.0}}};
+  s.roll = {0.0, 0.0, {{0.05, 5.65, 0.3}, {0.04, 0.9, 0.0}}};
+  s.pitch = {0.05, 0.0, {{0.06, 11.3, 0.8}, {0.08, 0.5, 0.0}}};
+  s.yaw = {0.0, 0.0, {{0.35, 0.8, 0.0}, {0.03, 5.65, 0.0}}};
+  s.yaw_follows_heading = true;
+  s.static_duration = 2.0;
+  s.ramp_duration = 2.0;
+  return s;
+}
+
+// Aggressive handheld: yaw swings of +-0.85 rad at 5.8 rad/s (peak ~280 deg/s) with roll and
+// pitch shakes, combined peak body rate close to 300 deg/s.
+TrajectorySpec aggressive_room() {
+  TrajectorySpec s;
+  s.x = {0.0, 0.0, {{1.6, 0.45, 0.0}, {0.08, 9.0, 0.2}}};
+  s.y = {0.0, 0.0, {{1.2, 0.6, 0.5}, {0.06, 7.5, 0.0}}};
+  s.z = {1.4, 0.0, {{0.15, 1.3, 0.0}, {0.04, 11.0, 0.4}}};
+  s.roll = {0.0, 0.0, {{0.30, 4.5, 0.0}}};
+  s.pitch = {0.0, 0.0, {{0.25, 3.7, 0.6}}};
+  s.yaw = {0.0, 0.0, {{0.85, 5.8, 0.0}, {1.5, 0.25, 0.0}}};
+  s.static_duration = 2.0;
+  s.ramp_duration = 2.5;
+  return s;
+}
+
+// A car on the street: 10 m/s, weaving gently within the lane, heading along the velocity.
+TrajectorySpec vehicle_street() {
+  TrajectorySpec s;
+  s.x = {0.0, 10.0, {}};
+  s.y = {0.0, 0.0, {{1.2, 0.12, 0.0}, {0.3, 0.41, 0.5}}};
+  s.z = {1.9, 0.0, {{0.02, 2.1, 0.0}}};
+  s.roll = {0.0, 0.0, {{0.01, 1.3, 0.0}}};
+  s.pitch = {0.0, 0.0, {{0.012, 1.7, 0.3}}};
+  s.yaw = {0.0, 0.0, {}};
+  s.yaw_follows_heading = true;
+  s.static_duration = 2.0;
+  s.ramp_duration = 3.0;
+  return s;
+}
+
+TrajectorySpec drone_street() {
+  TrajectorySpec s;
+  s.x = {0.0, 5.0, {}};
+  s.y = {0.0, 0.0, {{3.0, 0.2, 0.0}}};
+  s.z = {1.0, 0.0, {{-4.0, 0.15, -M_PI / 2}}};  // climbs from 1 m to ~9 m and back
+  s.roll = {0.0, 0.0, {{0.08, 0.9, 0.0}}};
+  s.pitch = {0.0, 0.0, {{0.1, 0.7, 0.3}}};
+  s.yaw = {0.0, 0.0, {{0.6, 0.3, 0.0}}};
+  s.static_duration = 2.0;
+  s.ramp_duration = 3.0;
+  return s;
+}
+
+TrajectorySpec corridor_walk() {
+  TrajectorySpec s;
+  s.x = {0.0, 1.0, {}};
+  s.y = {0.0, 0.0, {{0.25, 0.4, 0.0}}};
+  s.z = {1.35, 0.0, {{0.035, 11.3, 0.0}}};
+  s.roll = {0.0, 0.0, {{0.04, 5.65, 0.0}}};
+  s.pitch = {0.0, 0.0, {{0.05, 11.3, 0.5}}};
+  s.yaw = {0.0, 0.0, {{0.2, 0.5, 0.0}}};
+  s.static_duration = 2.0;
+  s.ramp_duration = 2.0;
+  return s;
+}
+
+LidarMount ouster(const std::string& model, const std::string& name) {
+  LidarMount m;
+  m.model = model;
+  m.name = name;
+  // Body = the Ouster's internal IMU. OS1 metadata: imu_to_sensor translation
+  // (6.253, -11.775, 7.645) mm, no rotation, so the sensor frame sits at minus that in the IMU.
+  m.T_body_sensor = make_pose({-0.006253, 0.011775, -0.007645}, Eigen::Matrix3d::Identity());
+  m.clock = ClockFaults{.offset_s = 1234.5, .skew_ppm = 30.0, .jitter_s = 0.0, .reset_at_s = -1};
+  m.range.sigma_m = 0.01;
+  m.range.min_range_m = 0.5;
+  m.range.max_range_m = 120.0;
+  m.imu_noise.rate_hz = 100.0;
+  m.imu_noise.gyro_bias0 = Eigen::Vector3d(0.002, -0.003, 0.001);
+  m.imu_noise.accel_bias0 = Eigen::Vector3d(0.02, -0.03, 0.05);
+  return m;
+}
+
+LidarMount livox(const std::string& model, const std::string& name, const Eigen::Vector3d& t) {
+  LidarMount m;
+  m.model = model;
+  m.name = name;
+  m.T_body_sensor = make_pose(t, Eigen::Matrix3d::Identity());
+  m.clock = ClockFaults{.offset_s = 52.25, .skew_ppm = -20.0, .jitter_s = 0.0, .reset_at_s = -1};
+  m.range.sigma_m = 0.02;
+  m.range.min_range_m = 0.2;
+  m.range.max_range_m = 200.0;
+  m.imu_noise.rate_hz = 200.0;
+  m.imu_noise.gyro_bias0 = Eigen::Vector3d(-0.002, 0.001, 0.0025);
+  m.imu_noise.accel_bias0 = Eigen::Vector3d(-0.03, 0.02, 0.04);
+  return m;
+}
+
+Scenario base(const std::string& name, const std::string& description, WorldKind world,
+              TrajectorySpec trajectory, double duration) {
+  Scenario s;
+  s.name = name;
+  s.description = description;
+  s.world = world;
+  s.trajectory = std::move(trajectory);
+  s.duration_s = duration;
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> list_scenarios() {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const char* name :
+       {"room_handheld_os1_64", "room_handheld_avia", "room_handheld_mid360",
+        "room_aggressive_os1_64", "street_vehicle_vlp16", "street_vehicle_os1_128",
+        "street_drone_os1_64", "corridor_handheld_os1_64"}) {
+    out.emplace_back(name, make_scenario(name).description);
+  }
+  return out;
+}
+
+Scenario make_scenario(const std::string& name) {
+  if (name == "room_handheld_os1_64") {
+    Scenario s =
+        base(name, "indoor room, handheld walk, Ouster OS1-64 + internal IMU, 640x512 camera",
+             WorldKind::kRoom, handheld_room(), 30.0);
+    s.lidars.push_back(ouster("OS1-64", "os1"));
+    s.cameras.push_back(rig_camera());
+    s.body_imu = "os1";
+    return s;
+  }
+  if (name == "room_handheld_avia") {
+    Scenario s = base(name, "indoor room, handheld walk, Livox Avia + internal IMU, 640x512 camera",
+                      WorldKind::kRoom, handheld_room(), 30.0);
+    s.lidars.push_back(livox("AVIA", "avia", {0.04165, 0.02326, -0.0284}));
+    s.cameras.push_back(rig_camera());
+    s.body_imu = "avia";
+    return s;
+  }
+  if (name == "room_handheld_mid360") {
+    Scenario s = base(name, "indoor room, handheld walk, Livox Mid-360 + internal IMU",
+                      WorldKind::kRoom, handheld_room(), 30.0);
+    s.lidars.push_back(livox("MID-360", "mid360", {-0.011, -0.02329, 0.04412}));
+    s.body_imu = "mid360";
+    return s;
+  }
+  if (name == "room_aggressive_os1_64") {
+    Scenario s = base(name, "indoor room, aggressive handheld (up to ~300 deg/s), Ouster OS1-64",
+                      WorldKind::kRoom, aggressive_room(), 30.0);
+    s.lidars.push_back(ouster("OS1-64", "os1"));
+    s.body_imu = "os1";
+    return s;
+  }
+  if (name == "street_vehicle_vlp16") {
+    Scenario s =
+        base(name, "street, ground vehicle at 10 m/s (>= 300 m), Velodyne VLP-16 + CAN IMU",
+             WorldKind::kStreet, vehicle_street(), 36.0);
+    LidarMount vlp;
+    vlp.model = "VLP-16";
+    vlp.name = "vlp16";
+    vlp.T_body_sensor = make_pose({0.1, 0.0, 0.35}, rpy(0.0, 0.02, 0.0));
+    vlp.clock =
+        ClockFaults{.offset_s = 1500.0, .skew_ppm = 15.0, .jitter_s = 0.0, .reset_at_s = -1};
+    vlp.range.sigma_m = 0.015;
+    vlp.range.min_range_m = 0.5;
+    vlp.range.max_range_m = 100.0;
+    vlp.imu = false;
+    s.lidars.push_back(vlp);
+    CanImuMount imu;
+    imu.noise.rate_hz = 200.0;
+    imu.noise.gyro_bias0 = Eigen::Vector3d(0.001, -0.002, 0.0015);
+    imu.noise.accel_bias0 = Eigen::Vector3d(0.03, 0.02, -0.04);
+    imu.clock = ClockFaults{.offset_s = 12.0, .skew_ppm = 40.0, .jitter_s = 0.0, .reset_at_s = -1};
+    s.can_imu = imu;
+    s.body_imu = imu.name;
+    return s;
+  }
+  if (name == "street_vehicle_os1_128") {
+    Scenario s = base(name, "street, ground vehicle at 10 m/s (>= 300 m), Ouster OS1-128",
+                      WorldKind::kStreet, vehicle_street(), 36.0);
+    s.lidars.push_back(ouster("OS1-128", "os1"));
+    s.body_imu = "os1";
+    return s;
+  }
+  if (name == "street_drone_os1_64") {
+    Scenario s = base(name, "street, drone flight 1-9 m high at 5 m/s, Ouster OS1-64 + camera",
+                      WorldKind::kStreet, drone_street(), 40.0);
+    s.lidars.push_back(ouster("OS1-64", "os1"));
+    s.cameras.push_back(rig_camera());
+    s.body_imu = "os1";
+    return s;
+  }
+  if (name == "corridor_handheld_os1_64") {
+    Scenario s = base(name, "long featureless corridor (LiDAR-degenerate along x), Ouster OS1-64",
+                      WorldKind::kCorridor, corridor_walk(), 30.0);
+    s.lidars.push_back(ouster("OS1-64", "os1"));
+    s.body_imu = "os1";
+    return s;
+  }
+  std::string known;
+  for (const char* n : {"room_handheld_os1_64", "room_handheld_avia", "room_handheld_mid360",
+                        "room_aggressive_os1_64", "street_vehicle_vlp16", "street_vehicle_os1_128",
+                        "street_drone_os1_64", "corridor_handheld_os1_64"}) {
+    known += std::string(known.empty() ? "" : ", ") + n;
+  }
+  throw Error("unknown scenario '" + name + "'; known scenarios: " + known);
+}
+
+}  // namespace livod::sim

@@ -1,0 +1,75 @@
+#pragma once
+// Scenarios: a world, a trajectory of the body (IMU) frame, and the sensors mounted on the body
+// with their clock and link faults. The named scenarios cover the estimator's test matrix; a
+// YAML file can describe custom ones (see docs/simulator.md).
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tools/sim/camera_sim.hpp"
+#include "tools/sim/imu_model.hpp"
+#include "tools/sim/sensor_clock.hpp"
+#include "tools/sim/sensor_sim.hpp"
+#include "tools/sim/trajectory.hpp"
+
+namespace livod::sim {
+
+enum class WorldKind { kRoom, kCorridor, kStreet };
+
+struct LidarMount {
+  std::string model;  // as `livod decode --model` spells it: OS1-64, OS1-128, VLP-16, AVIA, MID-360
+  std::string name;   // sensor name in the generated config (unique)
+  Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
+  ClockFaults clock;
+  LinkFaults link;
+  RangeModel range;
+  bool imu = true;  // emit the LiDAR-internal IMU (when the model has one)
+  ImuNoiseParams imu_noise;
+};
+
+struct CameraMount {
+  std::string name = "cam0";
+  CameraSimParams params;
+  Eigen::Isometry3d T_body_cam = Eigen::Isometry3d::Identity();
+  double time_offset_s = 0.0;  // stamps = true mid-exposure + this (a calibration error to find)
+};
+
+// An IMU on the CAN bus (SBG Ellipse layout, sensor-protocols.md 7.1 example B).
+struct CanImuMount {
+  std::string name = "can_imu";
+  Eigen::Isometry3d T_body_imu = Eigen::Isometry3d::Identity();
+  ImuNoiseParams noise;
+  ClockFaults clock;  // of its microsecond counter
+  LinkFaults link;    // bus + driver latency to the host receive stamp
+};
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  WorldKind world = WorldKind::kRoom;
+  double street_length_m = 420.0;
+  TrajectorySpec trajectory;
+  double duration_s = 30.0;
+  std::vector<LidarMount> lidars;
+  std::vector<CameraMount> cameras;
+  std::optional<CanImuMount> can_imu;
+  // Which IMU defines the body frame: "<lidar name>" (its internal IMU) or the CAN IMU's name.
+  std::string body_imu;
+  double groundtruth_rate_hz = 200.0;
+};
+
+// Names of the built-in scenarios with a one-line description each.
+std::vector<std::pair<std::string, std::string>> list_scenarios();
+
+// A built-in scenario by name; throws livod::Error listing the known names if unknown.
+Scenario make_scenario(const std::string& name);
+
+// A custom scenario from YAML (documented in docs/simulator.md); throws livod::Error listing every
+// problem found.
+Scenario load_scenario_yaml(const std::filesystem::path& path);
+
+}  // namespace livod::sim
