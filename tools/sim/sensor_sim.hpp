@@ -28,6 +28,24 @@ struct SceneContext {
   [[nodiscard]] Eigen::Isometry3d T_world_sensor(double t) const {
     return trajectory->at(t).T_world_body() * T_body_sensor;
   }
+
+  // Ideal specific force and angular rate of an IMU at T_body_imu (lever-arm effects included:
+  // the angular acceleration comes from a central difference of the analytic body rate).
+  [[nodiscard]] ImuTruth imu_truth(double t, const Eigen::Isometry3d& T_body_imu) const {
+    const TrajectoryState s = trajectory->at(t);
+    const ImuTruth body = ideal_imu(s, gravity_world);
+    const Eigen::Vector3d r = T_body_imu.translation();
+    const Eigen::Matrix3d R_imu_body = T_body_imu.linear().transpose();
+    if (r.squaredNorm() == 0.0) {
+      return {R_imu_body * body.gyro_rad_s, R_imu_body * body.accel_m_s2};
+    }
+    constexpr double kH = 1e-4;
+    const Eigen::Vector3d w = s.omega_body;
+    const Eigen::Vector3d w_dot =
+        (trajectory->at(t + kH).omega_body - trajectory->at(t - kH).omega_body) / (2.0 * kH);
+    const Eigen::Vector3d f = body.accel_m_s2 + w_dot.cross(r) + w.cross(w.cross(r));
+    return {R_imu_body * w, R_imu_body * f};
+  }
 };
 
 // Range measurement model shared by the LiDAR models.

@@ -1,0 +1,39 @@
+#include "tools/sim/lidar_registry.hpp"
+
+#include <functional>
+
+#include "core/error.hpp"
+
+namespace livod::sim {
+namespace {
+
+struct Entry {
+  const char* model;
+  const char* description;
+  std::function<std::unique_ptr<SimLidar>(const SimLidarOptions&)> make;
+};
+
+// One line per simulated model (SIM-LIDAR-REGISTRY).
+std::vector<Entry> entries() {
+  return {};
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> simulated_lidar_models() {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& e : entries()) out.emplace_back(e.model, e.description);
+  return out;
+}
+
+std::unique_ptr<SimLidar> make_sim_lidar(const std::string& model, const SimLidarOptions& options) {
+  for (const auto& e : entries()) {
+    if (model == e.model) return e.make(options);
+  }
+  std::string known;
+  for (const auto& e : entries()) known += std::string(known.empty() ? "" : ", ") + e.model;
+  throw Error("the simulator has no LiDAR model '" + model +
+              "' (simulated models: " + (known.empty() ? "none yet" : known) + ")");
+}
+
+}  // namespace livod::sim

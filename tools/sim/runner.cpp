@@ -1,0 +1,327 @@
+#include "tools/sim/runner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <opencv2/core/mat.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "drivers/imu/sbg_can.hpp"
+#include "io/candump.hpp"
+#include "io/pcap.hpp"
+#include "tools/sim/lidar_registry.hpp"
+#include "tools/sim/worlds.hpp"
+
+namespace livod::sim {
+namespace {
+
+World make_world(const Scenario& s, std::uint64_t seed) {
+  switch (s.world) {
+    case WorldKind::kRoom:
+      return make_room_world(seed);
+    case WorldKind::kCorridor:
+      return make_corridor_world();
+    case WorldKind::kStreet:
+      return make_street_world(seed, s.street_length_m);
+  }
+  throw Error("unknown world kind");
+}
+
+std::int64_t to_ns(double seconds) {
+  return static_cast<std::int64_t>(std::llround(seconds * 1e9));
+}
+
+// Derives independent, reproducible seeds for each sensor from the run seed and a name.
+std::uint64_t sub_seed(std::uint64_t seed, const std::string& name) {
+  std::uint64_t h = 1469598103934665603ULL ^ seed;
+  for (const char c : name) {
+    h ^= static_cast<std::uint8_t>(c);
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+std::string format_pose_row(double t, const Eigen::Vector3d& p, const Eigen::Matrix3d& R) {
+  const Eigen::Quaterniond q(R);
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(9) << t << ' ' << p.x() << ' ' << p.y() << ' ' << p.z()
+     << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+  return os.str();
+}
+
+std::string yaml_vec(const Eigen::Vector3d& v) {
+  std::ostringstream os;
+  os << std::setprecision(12) << '[' << v.x() << ", " << v.y() << ", " << v.z() << ']';
+  return os.str();
+}
+
+std::string yaml_matrix(const Eigen::Matrix3d& R) {
+  std::ostringstream os;
+  os << std::setprecision(12) << '[';
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) os << R(r, c) << (r == 2 && c == 2 ? "" : ", ");
+  }
+  os << ']';
+  return os.str();
+}
+
+void write_extrinsic(std::ostream& os, const Eigen::Isometry3d& T) {
+  os << "    extrinsic:\n"
+     << "      translation: " << yaml_vec(T.translation()) << "\n"
+     << "      rotation: {matrix: " << yaml_matrix(T.linear()) << "}\n";
+}
+
+const char* lidar_driver(const std::string& model) {
+  if (model.rfind("OS", 0) == 0) return "ouster";
+  if (model == "VLP-16" || model == "VLP-32C" || model == "HDL-32E" || model == "VLS-128") {
+    return "velodyne";
+  }
+  if (model == "MID-360" || model == "HAP") return "livox_sdk2";
+  return "livox_sdk1";
+}
+
+// Simulated LiDAR datagrams arrive out of order when a delay spike holds one back; a capture is
+// in arrival order, so pending datagrams are sorted and written once no later send can precede
+// them (everything sent after `horizon_ns` arrives after it).
+class OrderedPcapSink {
+ public:
+  explicit OrderedPcapSink(const std::filesystem::path& path) : writer_(path) {}
+  void add(SimDatagram&& d) { pending_.push_back(std::move(d)); }
+  void flush_until(std::int64_t horizon_ns) {
+    std::stable_sort(
+        pending_.begin(), pending_.end(),
+        [](const SimDatagram& a, const SimDatagram& b) { return a.host_time_ns < b.host_time_ns; });
+    std::size_t n = 0;
+    while (n < pending_.size() && pending_[n].host_time_ns < horizon_ns) {
+      const auto& d = pending_[n];
+      writer_.write_udp(d.host_time_ns, d.src_ip, d.src_port, 0xC0A80132, d.dst_port, d.payload);
+      ++n;
+      ++written_;
+    }
+    pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+  void finish() {
+    flush_until(std::numeric_limits<std::int64_t>::max());
+    writer_.flush();
+  }
+  [[nodiscard]] std::uint64_t written() const { return written_; }
+
+ private:
+  io::PcapWriter writer_;
+  std::vector<SimDatagram> pending_;
+  std::uint64_t written_ = 0;
+};
+
+void write_camera_yaml(const std::filesystem::path& path, const CameraMount& cam) {
+  const auto& k = cam.params.intrinsics;
+  std::ofstream os(path);
+  os << std::setprecision(12);
+  os << "# livod simulator camera (EuRoC/ASL sensor.yaml layout)\n"
+     << "sensor_type: camera\ncomment: simulated global-shutter camera\n"
+     << "T_BS:\n  cols: 4\n  rows: 4\n  data: [";
+  const Eigen::Matrix4d T = cam.T_body_cam.matrix();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) os << T(r, c) << (r == 3 && c == 3 ? "" : ", ");
+  }
+  os << "]\nrate_hz: " << cam.params.rate_hz << "\nresolution: [" << k.width << ", " << k.height
+     << "]\ncamera_model: pinhole\nintrinsics: [" << k.fx << ", " << k.fy << ", " << k.cx << ", "
+     << k.cy << "]\n"
+     << "distortion_model: "
+     << (k.model == CameraIntrinsics::Model::kEquidistant ? "equidistant" : "radial-tangential")
+     << "\ndistortion_coefficients: [" << k.distortion[0] << ", " << k.distortion[1] << ", "
+     << k.distortion[2] << ", " << k.distortion[3] << "]\n";
+}
+
+}  // namespace
+
+SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  const double duration = options.duration_s.value_or(scenario.duration_s);
+  if (!(duration > 0.0)) throw Error("simulation duration must be positive");
+  std::filesystem::create_directories(options.out_dir);
+  const World world = make_world(scenario, options.seed);
+  const Trajectory trajectory(scenario.trajectory);
+  const double epoch = options.host_epoch_s;
+  SimRunReport report;
+  report.simulated_s = duration;
+
+  // LiDARs (each with its internal IMU) -> one pcap each.
+  for (const auto& mount : scenario.lidars) {
+    SimLidarOptions lo;
+    lo.range = mount.range;
+    lo.clock = mount.clock;
+    lo.link = mount.link;
+    lo.imu = mount.imu;
+    lo.imu_noise = mount.imu_noise;
+    lo.seed = sub_seed(options.seed, mount.name);
+    lo.host_epoch_s = epoch;
+    auto lidar = make_sim_lidar(mount.model, lo);
+    SceneContext scene;
+    scene.world = &world;
+    scene.trajectory = &trajectory;
+    scene.T_body_sensor = mount.T_body_sensor;
+    const auto pcap_path = options.out_dir / (mount.name + ".pcap");
+    OrderedPcapSink sink(pcap_path);
+    SimOutputs out;
+    out.on_datagram = [&sink](SimDatagram&& d) { sink.add(std::move(d)); };
+    for (double t = 0.0; t < duration; t += options.chunk_s) {
+      const double t_end = std::min(duration, t + options.chunk_s);
+      lidar->run(t, t_end, scene, out);
+      sink.flush_until(to_ns(epoch + t_end));
+    }
+    sink.finish();
+    lidar->write_side_files(options.out_dir, mount.name);
+    report.sensors.push_back({mount.name, "lidar", sink.written(), 0, pcap_path});
+  }
+
+  // CAN IMU -> candump log.
+  if (scenario.can_imu) {
+    const auto& mount = *scenario.can_imu;
+    SensorClock clock(mount.clock, sub_seed(options.seed, mount.name + "/clock"));
+    Link link(mount.link, sub_seed(options.seed, mount.name + "/link"));
+    ImuModel imu(mount.noise, sub_seed(options.seed, mount.name + "/noise"));
+    SceneContext scene;
+    scene.world = &world;
+    scene.trajectory = &trajectory;
+    const auto log_path = options.out_dir / (mount.name + ".log");
+    io::CandumpWriter writer(log_path);
+    std::vector<io::CanFrame> pending;
+    SimSensorReport rep{mount.name, "can_imu", 0, 0, log_path};
+    const double period = 1.0 / mount.noise.rate_hz;
+    constexpr double kFrameTime = 232e-6;  // 116 bits at 500 kbit/s per 8-byte frame
+    const auto n_samples = static_cast<std::int64_t>(std::floor(duration / period));
+    for (std::int64_t k = 0; k < n_samples; ++k) {
+      const double t = static_cast<double>(k) * period;
+      const ImuTruth m = imu.measure(scene.imu_truth(t, mount.T_body_imu));
+      const auto device_us = static_cast<std::uint32_t>(
+          static_cast<std::uint64_t>(clock.stamp_ns(t) / 1000) & 0xFFFFFFFFULL);
+      const auto frames = imu::encode_sbg_sample(device_us, m.accel_m_s2, m.gyro_rad_s, 35.0);
+      const double delay = link.delay_s();
+      if (delay < 0.0) {
+        ++rep.dropped;
+        continue;
+      }
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        io::CanFrame cf;
+        cf.interface = "can0";
+        cf.id = frames[f].id;
+        cf.len = frames[f].len;
+        std::copy(frames[f].data.begin(), frames[f].data.end(), cf.data.begin());
+        // candump logs have microsecond resolution.
+        const double rx = epoch + t + delay + kFrameTime * static_cast<double>(f + 1);
+        cf.time_ns = static_cast<std::int64_t>(std::llround(rx * 1e6)) * 1000;
+        pending.push_back(cf);
+      }
+    }
+    std::stable_sort(
+        pending.begin(), pending.end(),
+        [](const io::CanFrame& a, const io::CanFrame& b) { return a.time_ns < b.time_ns; });
+    for (const auto& f : pending) writer.write(f);
+    writer.flush();
+    rep.messages = pending.size();
+    report.sensors.push_back(rep);
+  }
+
+  // Cameras -> EuRoC/ASL folders.
+  for (const auto& cam : scenario.cameras) {
+    const CameraSim sim(cam.params);
+    const auto dir = options.out_dir / "mav0" / cam.name;
+    std::filesystem::create_directories(dir / "data");
+    std::ofstream csv(dir / "data.csv");
+    csv << "#timestamp [ns],filename,exposure_ns\n";
+    write_camera_yaml(dir / "sensor.yaml", cam);
+    std::mt19937_64 rng(sub_seed(options.seed, cam.name));
+    GreyImage img;
+    SimSensorReport rep{cam.name, "camera", 0, 0, dir};
+    const double period = 1.0 / cam.params.rate_hz;
+    for (double t = period / 2; t < duration; t += period) {
+      const double exposure = sim.exposure_at(t);
+      const Eigen::Isometry3d T_world_cam = trajectory.at(t).T_world_body() * cam.T_body_cam;
+      const std::int64_t stamp = to_ns(epoch + t + cam.time_offset_s);
+      const std::string file = std::to_string(stamp) + ".png";
+      if (options.write_images) {
+        sim.render(world, T_world_cam, exposure, rng, img);
+        const cv::Mat mat(img.height, img.width, CV_8UC1, img.pixels.data());
+        if (!cv::imwrite((dir / "data" / file).string(), mat)) {
+          throw Error("cannot write image " + (dir / "data" / file).string());
+        }
+      }
+      csv << stamp << ',' << file << ',' << to_ns(exposure) << '\n';
+      ++rep.messages;
+    }
+    report.sensors.push_back(rep);
+  }
+
+  // Ground truth of the body (IMU) frame on the host clock.
+  {
+    std::ofstream gt(options.out_dir / "groundtruth.txt");
+    gt << "# timestamp tx ty tz qx qy qz qw  (livod sim: body/IMU frame in the world frame, "
+          "host clock)\n";
+    const double period = 1.0 / scenario.groundtruth_rate_hz;
+    const auto n = static_cast<std::int64_t>(std::floor(duration / period)) + 1;
+    for (std::int64_t k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) * period;
+      const auto s = trajectory.at(t);
+      gt << format_pose_row(epoch + t, s.p_world, s.R_world_body);
+      ++report.groundtruth_poses;
+    }
+  }
+
+  // A livod configuration that replays the outputs.
+  {
+    std::ofstream cfg(options.out_dir / "config.yaml");
+    cfg << "# Generated by `livod sim --scenario " << scenario.name << " --seed " << options.seed
+        << "`: replays this folder.\n";
+    cfg << "body_frame: " << scenario.body_imu << "\n";
+    cfg << "sensors:\n";
+    for (const auto& mount : scenario.lidars) {
+      cfg << "  - name: " << mount.name << "\n"
+          << "    driver: " << lidar_driver(mount.model) << "\n"
+          << "    model: " << mount.model << "\n"
+          << "    source:\n      replay: {file: " << mount.name << ".pcap}\n";
+      if (lidar_driver(mount.model) == std::string("ouster")) {
+        cfg << "    metadata: " << mount.name << ".json\n";
+      }
+      cfg << "    imu: {enabled: " << (mount.imu ? "true" : "false") << "}\n";
+      if (mount.name != scenario.body_imu) write_extrinsic(cfg, mount.T_body_sensor);
+    }
+    if (scenario.can_imu) {
+      const auto& imu = *scenario.can_imu;
+      cfg << "  - name: " << imu.name << "\n    driver: can_imu\n    model: SBG\n"
+          << "    source:\n      replay: {file: " << imu.name << ".log}\n"
+          << "    can: {decoder: sbg}\n";
+      if (imu.name != scenario.body_imu) write_extrinsic(cfg, imu.T_body_imu);
+    }
+    for (const auto& cam : scenario.cameras) {
+      const auto& k = cam.params.intrinsics;
+      cfg << "  - name: " << cam.name << "\n    driver: v4l2\n    model: generic\n"
+          << "    source:\n      replay: {file: mav0/" << cam.name << "}\n"
+          << "    camera: {model: "
+          << (k.model == CameraIntrinsics::Model::kEquidistant ? "equidistant" : "pinhole")
+          << ", width: " << k.width << ", height: " << k.height << ", intrinsics: [" << k.fx << ", "
+          << k.fy << ", " << k.cx << ", " << k.cy << "], distortion: [" << k.distortion[0] << ", "
+          << k.distortion[1] << ", " << k.distortion[2] << ", " << k.distortion[3] << "]}\n";
+      write_extrinsic(cfg, cam.T_body_cam);
+    }
+    cfg << "outputs:\n  trajectory: trajectory.txt\n";
+  }
+
+  {
+    std::ofstream info(options.out_dir / "scenario.txt");
+    info << "scenario: " << scenario.name << "\n"
+         << scenario.description << "\n"
+         << "seed: " << options.seed << "\nduration_s: " << duration << "\n"
+         << "host_epoch_s: " << std::setprecision(15) << epoch << "\n";
+  }
+
+  report.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return report;
+}
+
+}  // namespace livod::sim
