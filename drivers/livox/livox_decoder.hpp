@@ -1,0 +1,68 @@
+#pragma once
+// Scan assembly for Livox LiDARs (SDK1 and SDK2 models) behind drivers::LidarDecoder. Livox
+// scanning is non-repetitive, so a scan is a time window: points are cut into scans of
+// `scan_period_ns` aligned to multiples of the period on the sensor clock (like livox_ros_driver's
+// 10 Hz frames). SDK2 sequence gaps come from udp_cnt; SDK1 has no counter, so a gap is a packet
+// timestamp further than 1.5 packet spans after the previous one.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "drivers/lidar_decoder.hpp"
+#include "drivers/livox/packets.hpp"
+
+namespace livod::livox {
+
+enum class Protocol { kSdk1, kSdk2 };
+
+struct LivoxModel {
+  std::string name;  // AVIA, HORIZON, TELE-15, MID-40, MID-70, MID-360, HAP
+  Protocol protocol = Protocol::kSdk1;
+  std::uint32_t point_interval_ns = 4167;  // SDK1 only
+  std::uint8_t lines = 6;
+  std::uint16_t data_port = 56001;  // host ports livod asks for / the vendor defaults
+  std::uint16_t imu_port = 56001;
+};
+
+// nullopt for an unknown model name.
+std::optional<LivoxModel> livox_model(const std::string& name);
+
+struct LivoxDecoderOptions {
+  std::int64_t scan_period_ns = 100'000'000;
+  bool drop_invalid_points = true;  // no-return points are not emitted
+  bool keep_first_return_only = false;
+};
+
+class LivoxDecoder final : public drivers::LidarDecoder {
+ public:
+  LivoxDecoder(LivoxModel model, LivoxDecoderOptions options);
+
+  void on_packet(const drivers::PacketView& packet, const drivers::DecoderSinks& sinks) override;
+  void flush(const drivers::DecoderSinks& sinks) override;
+  [[nodiscard]] const drivers::DecoderCounters& counters() const override { return counters_; }
+  [[nodiscard]] std::vector<std::uint16_t> default_ports() const override;
+  [[nodiscard]] std::string model_name() const override { return model_.name; }
+
+  [[nodiscard]] std::uint64_t decode_error_count(DecodeError e) const {
+    return error_counts_[static_cast<std::size_t>(e)];
+  }
+
+ private:
+  void emit(const drivers::DecoderSinks& sinks);
+
+  LivoxModel model_;
+  LivoxDecoderOptions options_;
+  drivers::DecoderCounters counters_;
+  std::array<std::uint64_t, 6> error_counts_{};
+  LivoxPacket packet_;
+  LidarScan scan_;
+  bool scan_open_ = false;
+  std::int64_t scan_index_ = 0;  // floor(sensor time / period) of the open scan
+  std::uint32_t next_sequence_ = 0;
+  std::optional<std::uint16_t> last_udp_cnt_;
+  std::optional<std::int64_t> last_packet_end_ns_;
+  std::int32_t last_span_ns_ = 0;
+};
+
+}  // namespace livod::livox

@@ -1,0 +1,108 @@
+#include "drivers/livox/livox_decoder.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace livod::livox {
+namespace {
+
+struct Collected {
+  std::vector<LidarScan> scans;
+  std::vector<ImuSample> imu;
+  drivers::DecoderSinks sinks() {
+    return {[this](const LidarScan& s) { scans.push_back(s); },
+            [this](const ImuSample& s) { imu.push_back(s); }};
+  }
+};
+
+std::array<LivoxPoint, 96> points(float x) {
+  std::array<LivoxPoint, 96> pts{};
+  for (auto& p : pts) {
+    p.x = x;
+    p.y = 1.0F;
+    p.z = 0.5F;
+    p.valid = true;
+  }
+  return pts;
+}
+
+TEST(LivoxDecoder, Mid360StreamIsCutIntoPeriodAlignedScansAndCountsGaps) {
+  LivoxDecoder dec(*livox_model("MID-360"), LivoxDecoderOptions{});
+  Collected out;
+  // 200 kpts/s: 96 points per 480 us packet. 0.35 s of packets starting at t = 1.02 s, with
+  // packet 100 missing, and one IMU packet.
+  const std::int64_t t0 = 1'020'000'000;
+  const auto pts = points(4.0F);
+  int sent = 0;
+  for (int k = 0; k < 730; ++k) {
+    if (k == 100) continue;
+    Sdk2Header h;
+    h.timestamp_ns = static_cast<std::uint64_t>(t0 + k * 480'000LL);
+    h.time_interval_100ns = 4750;
+    h.udp_cnt = static_cast<std::uint16_t>(k);
+    const auto bytes = encode_sdk2_points(h, pts);
+    dec.on_packet({bytes, t0 + k * 480'000LL + 600'000, 56301}, out.sinks());
+    ++sent;
+  }
+  const auto imu =
+      encode_sdk2_imu(Sdk2Header{}, Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 9.8));
+  dec.on_packet({imu, 5, 56401}, out.sinks());
+  dec.flush(out.sinks());
+
+  EXPECT_EQ(dec.counters().sequence_gaps, 1u);
+  EXPECT_EQ(dec.counters().lidar_packets, static_cast<std::uint64_t>(sent));
+  ASSERT_EQ(out.imu.size(), 1u);
+  EXPECT_NEAR(out.imu[0].accel_m_s2.z(), 9.8, 1e-5);
+  // Points span [1.02, 1.3704) s: scans [1.0,1.1) partial, [1.1,1.2), [1.2,1.3), [1.3,1.4) partial.
+  ASSERT_EQ(out.scans.size(), 4u);
+  std::size_t total = 0;
+  for (std::size_t i = 0; i < out.scans.size(); ++i) {
+    const auto& s = out.scans[i];
+    EXPECT_EQ(s.sequence, i);
+    EXPECT_EQ(s.start.sensor.ns, 1'000'000'000 + static_cast<std::int64_t>(i) * 100'000'000);
+    for (std::size_t p = 0; p < s.size(); ++p) {
+      ASSERT_GE(s.t_offset_ns[p], 0);
+      ASSERT_LT(s.t_offset_ns[p], 100'000'000);
+    }
+    total += s.size();
+  }
+  EXPECT_EQ(total, static_cast<std::size_t>(sent) * 96);
+  EXPECT_EQ(out.scans[0].t_offset_ns.front(), 20'000'000);
+  // Host time of a scan start = rx - packet span + point offset - (point time - window start).
+  EXPECT_EQ(out.scans[1].start.host.ns - out.scans[1].start.sensor.ns, 600'000 - 475'000);
+}
+
+TEST(LivoxDecoder, AviaSdk1GapsFromTimestampsAndMalformedPacketsAreCounted) {
+  LivoxDecoder dec(*livox_model("AVIA"), LivoxDecoderOptions{});
+  Collected out;
+  const auto pts = points(2.0F);
+  const std::int64_t span = 96LL * 4167;  // one packet: 96 points at 4167 ns
+  for (int k = 0; k < 50; ++k) {
+    if (k == 10 || k == 11) continue;  // two packets lost
+    Sdk1Header h;
+    h.timestamp = static_cast<std::uint64_t>(k * span);
+    const auto bytes = encode_sdk1_points(h, pts);
+    dec.on_packet({bytes, k * span, 56001}, out.sinks());
+  }
+  std::vector<std::byte> junk(40, std::byte{0x55});
+  dec.on_packet({junk, 0, 56001}, out.sinks());
+  dec.flush(out.sinks());
+  EXPECT_EQ(dec.counters().sequence_gaps, 2u);
+  EXPECT_EQ(dec.counters().decode_errors, 1u);
+  EXPECT_EQ(dec.decode_error_count(DecodeError::kUnknownDataType), 1u);
+  ASSERT_EQ(out.scans.size(), 1u);
+  EXPECT_EQ(out.scans[0].size(), 48u * 96u);
+  EXPECT_EQ(out.scans[0].ring[7], 1);  // line = point index mod 6
+}
+
+TEST(LivoxDecoder, KnowsTheModelsAndTheirPorts) {
+  EXPECT_FALSE(livox_model("VLP-16"));
+  LivoxDecoder mid(*livox_model("MID-360"), {});
+  EXPECT_EQ(mid.default_ports(), (std::vector<std::uint16_t>{56301, 56401}));
+  LivoxDecoder avia(*livox_model("AVIA"), {});
+  EXPECT_EQ(avia.default_ports(), (std::vector<std::uint16_t>{56001}));
+}
+
+}  // namespace
+}  // namespace livod::livox
