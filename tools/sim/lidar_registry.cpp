@@ -3,6 +3,7 @@
 #include <functional>
 
 #include "core/error.hpp"
+#include "tools/sim/livox_sim.hpp"
 
 namespace livod::sim {
 namespace {
@@ -15,7 +16,12 @@ struct Entry {
 
 // One line per simulated model (SIM-LIDAR-REGISTRY).
 std::vector<Entry> entries() {
-  return {};
+  return {
+      {"AVIA", "Livox Avia (SDK1), 6-line rosette, 240 kpts/s, internal IMU", make_sim_avia},
+      {"MID-360", "Livox Mid-360 (SDK2), 360 deg, 4 lines, 200 kpts/s, internal IMU",
+       make_sim_mid360},
+      // SIM-LIDAR-REGISTRY: one line per simulated model
+  };
 }
 
 }  // namespace
