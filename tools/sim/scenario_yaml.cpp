@@ -1,0 +1,239 @@
+// Custom scenarios from YAML. Every problem is collected and reported together.
+//
+//   base: room_handheld_avia      # optional: start from a named scenario, override below
+//   name: my_run
+//   description: ...
+//   world: room | corridor | street
+//   street_length_m: 420
+//   duration_s: 30
+//   trajectory:                   # each of x y z roll pitch yaw: {c0, c1, terms: [[a, w,
+//   phase]...]}
+//     x: {c0: 0, c1: 1.0, terms: [[0.2, 0.5, 0.0]]}
+//     yaw_follows_heading: true
+//     static_duration_s: 2
+//     ramp_duration_s: 2
+//   lidars:                       # replaces the base's list when present
+//     - {model: AVIA, name: avia, translation: [0.04, 0.02, -0.03], rpy_deg: [0, 0, 0],
+//        clock: {offset_s: 5, skew_ppm: 20, jitter_s: 0, reset_at_s: -1},
+//        link: {delay_floor_s: 8e-5, delay_mean_s: 4e-5, loss_probability: 0.0},
+//        range: {sigma_m: 0.02, min_m: 0.2, max_m: 200, dropout: 0.002}, imu: true}
+//   body_imu: avia
+//   cameras: []                   # clears the base's cameras (only clearing is supported)
+
+#include <yaml-cpp/yaml.h>
+
+#include <sstream>
+
+#include "core/error.hpp"
+#include "tools/sim/scenario.hpp"
+
+namespace livod::sim {
+namespace {
+
+class Problems {
+ public:
+  void add(const YAML::Node& node, const std::string& path, const std::string& message) {
+    std::ostringstream os;
+    if (node.IsDefined() && node.Mark().line >= 0) os << "line " << node.Mark().line + 1 << ": ";
+    os << path << ": " << message;
+    list_.push_back(os.str());
+  }
+  [[nodiscard]] bool empty() const { return list_.empty(); }
+  [[nodiscard]] std::string text() const {
+    std::string s;
+    for (const auto& p : list_) s += "\n  " + p;
+    return s;
+  }
+
+ private:
+  std::vector<std::string> list_;
+};
+
+template <class T>
+void read(const YAML::Node& map, const char* key, T& out, const std::string& path, Problems& p) {
+  const YAML::Node n = map[key];
+  if (!n) return;
+  try {
+    out = n.as<T>();
+  } catch (const YAML::Exception&) {
+    p.add(n, path + "." + key, "wrong type");
+  }
+}
+
+void check_keys(const YAML::Node& map, std::initializer_list<const char*> allowed,
+                const std::string& path, Problems& p) {
+  if (!map.IsMap()) {
+    p.add(map, path, "expected a mapping");
+    return;
+  }
+  for (const auto& kv : map) {
+    const auto key = kv.first.as<std::string>();
+    bool ok = false;
+    for (const char* a : allowed) ok = ok || key == a;
+    if (!ok) p.add(kv.first, path + "." + key, "unknown key");
+  }
+}
+
+Eigen::Vector3d vec3(const YAML::Node& n, const std::string& path, Problems& p) {
+  try {
+    const auto v = n.as<std::vector<double>>();
+    if (v.size() == 3) return {v[0], v[1], v[2]};
+  } catch (const YAML::Exception&) {
+  }
+  p.add(n, path, "expected a list of 3 numbers");
+  return Eigen::Vector3d::Zero();
+}
+
+void read_function(const YAML::Node& n, SmoothFunction& f, const std::string& path, Problems& p) {
+  if (!n) return;
+  check_keys(n, {"c0", "c1", "terms"}, path, p);
+  if (!n.IsMap()) return;
+  read(n, "c0", f.c0, path, p);
+  read(n, "c1", f.c1, path, p);
+  if (const auto terms = n["terms"]) {
+    f.terms.clear();
+    if (!terms.IsSequence()) {
+      p.add(terms, path + ".terms", "expected a list of [amplitude, omega, phase]");
+      return;
+    }
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      try {
+        const auto v = terms[i].as<std::vector<double>>();
+        if (v.size() != 3) throw YAML::Exception(terms[i].Mark(), "size");
+        f.terms.push_back({v[0], v[1], v[2]});
+      } catch (const YAML::Exception&) {
+        p.add(terms[i], path + ".terms[" + std::to_string(i) + "]",
+              "expected [amplitude, omega, phase]");
+      }
+    }
+  }
+}
+
+}  // namespace
+
+Scenario load_scenario_yaml(const std::filesystem::path& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::Exception& e) {
+    throw Error(file.string() + ": " + e.what());
+  }
+  Problems p;
+  Scenario s;
+  check_keys(root,
+             {"base", "name", "description", "world", "street_length_m", "duration_s", "trajectory",
+              "lidars", "cameras", "body_imu", "groundtruth_rate_hz"},
+             "scenario", p);
+  if (!root.IsMap()) throw Error(file.string() + ": a scenario file is a YAML mapping");
+  if (const auto base = root["base"]) {
+    try {
+      s = make_scenario(base.as<std::string>());
+    } catch (const Error& e) {
+      p.add(base, "scenario.base", e.what());
+    }
+  }
+  read(root, "name", s.name, "scenario", p);
+  read(root, "description", s.description, "scenario", p);
+  read(root, "street_length_m", s.street_length_m, "scenario", p);
+  read(root, "duration_s", s.duration_s, "scenario", p);
+  read(root, "body_imu", s.body_imu, "scenario", p);
+  read(root, "groundtruth_rate_hz", s.groundtruth_rate_hz, "scenario", p);
+  if (const auto w = root["world"]) {
+    const auto name = w.as<std::string>("");
+    if (name == "room")
+      s.world = WorldKind::kRoom;
+    else if (name == "corridor")
+      s.world = WorldKind::kCorridor;
+    else if (name == "street")
+      s.world = WorldKind::kStreet;
+    else
+      p.add(w, "scenario.world", "expected room, corridor or street");
+  }
+  if (const auto t = root["trajectory"]) {
+    check_keys(t,
+               {"x", "y", "z", "roll", "pitch", "yaw", "yaw_follows_heading", "static_duration_s",
+                "ramp_duration_s"},
+               "scenario.trajectory", p);
+    auto& tr = s.trajectory;
+    read_function(t["x"], tr.x, "scenario.trajectory.x", p);
+    read_function(t["y"], tr.y, "scenario.trajectory.y", p);
+    read_function(t["z"], tr.z, "scenario.trajectory.z", p);
+    read_function(t["roll"], tr.roll, "scenario.trajectory.roll", p);
+    read_function(t["pitch"], tr.pitch, "scenario.trajectory.pitch", p);
+    read_function(t["yaw"], tr.yaw, "scenario.trajectory.yaw", p);
+    read(t, "yaw_follows_heading", tr.yaw_follows_heading, "scenario.trajectory", p);
+    read(t, "static_duration_s", tr.static_duration, "scenario.trajectory", p);
+    read(t, "ramp_duration_s", tr.ramp_duration, "scenario.trajectory", p);
+  }
+  if (const auto lidars = root["lidars"]) {
+    s.lidars.clear();
+    if (!lidars.IsSequence()) p.add(lidars, "scenario.lidars", "expected a list");
+    for (std::size_t i = 0; lidars.IsSequence() && i < lidars.size(); ++i) {
+      const std::string path = "scenario.lidars[" + std::to_string(i) + "]";
+      const auto n = lidars[i];
+      check_keys(n, {"model", "name", "translation", "rpy_deg", "clock", "link", "range", "imu"},
+                 path, p);
+      if (!n.IsMap()) continue;
+      LidarMount m;
+      read(n, "model", m.model, path, p);
+      read(n, "name", m.name, path, p);
+      read(n, "imu", m.imu, path, p);
+      if (m.model.empty()) p.add(n, path + ".model", "required");
+      if (m.name.empty()) p.add(n, path + ".name", "required");
+      if (n["translation"])
+        m.T_body_sensor.translation() = vec3(n["translation"], path + ".translation", p);
+      if (n["rpy_deg"]) {
+        const Eigen::Vector3d r = vec3(n["rpy_deg"], path + ".rpy_deg", p) * (M_PI / 180.0);
+        m.T_body_sensor.linear() = (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
+                                    Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
+                                    Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
+                                       .toRotationMatrix();
+      }
+      if (const auto c = n["clock"]) {
+        check_keys(c, {"offset_s", "skew_ppm", "jitter_s", "reset_at_s"}, path + ".clock", p);
+        read(c, "offset_s", m.clock.offset_s, path + ".clock", p);
+        read(c, "skew_ppm", m.clock.skew_ppm, path + ".clock", p);
+        read(c, "jitter_s", m.clock.jitter_s, path + ".clock", p);
+        read(c, "reset_at_s", m.clock.reset_at_s, path + ".clock", p);
+      }
+      if (const auto l = n["link"]) {
+        check_keys(l,
+                   {"delay_floor_s", "delay_mean_s", "spike_probability", "spike_mean_s",
+                    "loss_probability"},
+                   path + ".link", p);
+        read(l, "delay_floor_s", m.link.delay_floor_s, path + ".link", p);
+        read(l, "delay_mean_s", m.link.delay_mean_s, path + ".link", p);
+        read(l, "spike_probability", m.link.spike_probability, path + ".link", p);
+        read(l, "spike_mean_s", m.link.spike_mean_s, path + ".link", p);
+        read(l, "loss_probability", m.link.loss_probability, path + ".link", p);
+        if (m.link.loss_probability < 0.0 || m.link.loss_probability > 1.0) {
+          p.add(l, path + ".link.loss_probability", "must be within [0, 1]");
+        }
+      }
+      if (const auto r = n["range"]) {
+        check_keys(r, {"sigma_m", "min_m", "max_m", "dropout"}, path + ".range", p);
+        read(r, "sigma_m", m.range.sigma_m, path + ".range", p);
+        read(r, "min_m", m.range.min_range_m, path + ".range", p);
+        read(r, "max_m", m.range.max_range_m, path + ".range", p);
+        read(r, "dropout", m.range.dropout_probability, path + ".range", p);
+      }
+      s.lidars.push_back(m);
+    }
+  }
+  if (const auto cams = root["cameras"]) {
+    if (!cams.IsSequence() || cams.size() != 0) {
+      p.add(cams, "scenario.cameras", "only an empty list (no cameras) is supported");
+    } else {
+      s.cameras.clear();
+    }
+  }
+  if (s.name.empty()) p.add(root, "scenario.name", "required (or give a base)");
+  if (!(s.duration_s > 0.0)) p.add(root["duration_s"], "scenario.duration_s", "must be positive");
+  bool body_found = s.can_imu && s.can_imu->name == s.body_imu;
+  for (const auto& l : s.lidars) body_found = body_found || l.name == s.body_imu;
+  if (!body_found) p.add(root["body_imu"], "scenario.body_imu", "must name a LiDAR or the CAN IMU");
+  if (!p.empty()) throw Error(file.string() + ": invalid scenario:" + p.text());
+  return s;
+}
+
+}  // namespace livod::sim
