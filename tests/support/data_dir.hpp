@@ -12,7 +12,7 @@ std::filesystem::path data_dir();
 // data_dir() / relative; fails the current test (GTEST_SKIP is not used: missing data is an error).
 std::filesystem::path data_path(const std::string& relative);
 
-// A fresh empty directory under the system temp dir, removed when the process exits normally.
+// A fresh empty directory under the system temp dir (left in place for inspection after a run).
 std::filesystem::path temp_dir(const std::string& name);
 
 }  // namespace livod::test
