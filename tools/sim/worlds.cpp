@@ -55,10 +55,26 @@ World make_room_world(std::uint64_t seed) {
   }
   w.add_cylinder({4.5, 3.2, 0.0}, 0.25, kHeight, surface(0.7F, 4.0F, 60));
   w.add_cylinder({-4.6, -3.1, 0.0}, 0.2, kHeight, surface(0.7F, 4.0F, 61));
-  // A few wall-mounted boxes (shelves, frames) break the walls' symmetry.
-  w.add_box({kHalfX - 0.15, -1.0, 1.6}, {0.15, 0.8, 0.4}, 0.0, surface(0.8F, 5.0F, 70));
-  w.add_box({-1.5, kHalfY - 0.1, 2.0}, {0.9, 0.1, 0.5}, 0.0, surface(0.9F, 5.0F, 71));
-  w.add_box({2.0, -kHalfY + 0.2, 1.2}, {0.6, 0.2, 1.2}, 0.0, surface(0.35F, 3.0F, 72));
+  // Wall-mounted boxes (shelves, frames, radiators) on every wall at varied heights and depths:
+  // a narrow-field LiDAR facing any wall still sees structure in all three directions.
+  std::uint32_t id = 70;
+  for (int wall = 0; wall < 4; ++wall) {
+    const bool along_x = wall < 2;  // walls at y = +-kHalfY run along x
+    const double sign = (wall % 2 == 0) ? 1.0 : -1.0;
+    const double length = along_x ? kHalfX : kHalfY;
+    for (int k = 0; k < 4; ++k) {
+      const double s_pos = (-0.75 + 0.5 * k) * length + 0.4 * (unit(rng) - 0.5);
+      const double depth = 0.1 + 0.25 * unit(rng);
+      const double width = 0.3 + 0.6 * unit(rng);
+      const double height = 0.2 + 0.5 * unit(rng);
+      const double z = 0.6 + 1.8 * unit(rng);
+      const Eigen::Vector3d half =
+          along_x ? Eigen::Vector3d(width, depth, height) : Eigen::Vector3d(depth, width, height);
+      const Eigen::Vector3d centre = along_x ? Eigen::Vector3d(s_pos, sign * (kHalfY - depth), z)
+                                             : Eigen::Vector3d(sign * (kHalfX - depth), s_pos, z);
+      w.add_box(centre, half, 0.0, surface(static_cast<float>(0.3 + 0.6 * unit(rng)), 5.0F, id++));
+    }
+  }
   w.build();
   return w;
 }

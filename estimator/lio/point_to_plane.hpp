@@ -1,0 +1,78 @@
+#pragma once
+// Point-to-plane measurements of a scan against the voxel map (fast-livo2-notes.md 1.3), as
+// normal equations for the iterated update. Per point p_l (LiDAR frame, undistorted to the update
+// time):
+//   p_i = T_imu_lidar p_l,  p_w = R p_i + t
+//   prediction h = n^T p_w + d,  measurement 0  ->  z = -(n^T p_w + d)
+//   H = [ ([p_i]x R^T n)^T , n^T , 0 ... ]     (rotation block, position block)
+//   weight 1 / (var_plane + n^T S_w n),  S_w = R R_il S_l R_il^T R^T   (FAST-LIVO2 defect 8:
+//   it forgets R_il here)
+// Association is redone at every iteration. Residuals are computed in parallel into a per-point
+// array and summed in point order, so the result does not depend on the thread count.
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "estimator/filter/esikf.hpp"
+#include "estimator/map/point_covariance.hpp"
+#include "estimator/map/voxel_map.hpp"
+
+namespace livod::estimator {
+
+struct ScanPoint {
+  Eigen::Vector3d p_lidar = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d cov_lidar = Eigen::Matrix3d::Zero();
+};
+
+// Prediction h = n^T (R p_imu + t) + d of one point against a plane, and its Jacobian with
+// respect to the (rotation, position) error state.
+struct PlaneRowJacobian {
+  double h = 0.0;
+  Eigen::Matrix<double, 1, 6> H;
+};
+PlaneRowJacobian point_to_plane_jacobian(const Plane& plane, const Eigen::Vector3d& p_imu,
+                                         const State& x);
+
+struct PointToPlaneStats {
+  int points = 0;
+  int matched = 0;
+  double mean_abs_residual_m = 0.0;
+};
+
+class PointToPlane {
+ public:
+  PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, int threads);
+
+  // Accumulates the normal equations of every matched point at state x.
+  bool linearize(const std::vector<ScanPoint>& points, const State& x, NormalEquations& eq,
+                 int min_matches);
+
+  [[nodiscard]] const PointToPlaneStats& stats() const { return stats_; }
+
+ private:
+  struct Row {
+    bool matched = false;
+    Eigen::Matrix<double, 1, 6> H;
+    double z = 0.0;
+    double weight = 0.0;
+  };
+
+  const VoxelMap& map_;
+  Eigen::Isometry3d T_imu_lidar_;
+  int threads_;
+  std::vector<Row> rows_;
+  PointToPlaneStats stats_;
+};
+
+// Degeneracy of the LiDAR constraints from the pose block of H^T R^-1 H: the eigenvalues of the
+// translation and rotation information, and the weakest translation direction (world frame).
+struct DegeneracyReport {
+  Eigen::Vector3d translation_eigenvalues = Eigen::Vector3d::Zero();  // ascending
+  Eigen::Vector3d rotation_eigenvalues = Eigen::Vector3d::Zero();
+  Eigen::Vector3d weakest_translation = Eigen::Vector3d::Zero();
+  double translation_ratio = 0.0;  // smallest / largest translation eigenvalue
+  bool degenerate = false;
+};
+DegeneracyReport assess_degeneracy(const StateMatrix& information, double min_ratio);
+
+}  // namespace livod::estimator

@@ -1,0 +1,48 @@
+#pragma once
+// Plane fitting with uncertainty (VoxelMap, fast-livo2-notes.md 1.3). The plane of N points is
+// the centroid q and the eigenvector n of the smallest eigenvalue of their scatter matrix; its
+// 6x6 covariance over (n, q) is propagated from every point's 3x3 covariance through the
+// analytic Jacobians
+//   dq/dp_j = I / N
+//   dn/dp_j = sum_{m=2,3} u_m [((p_j - q).n) u_m^T + ((p_j - q).u_m) n^T] / (N (lambda_1 -
+//   lambda_m))
+// (first-order eigenvector perturbation of the scatter matrix).
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace livod::estimator {
+
+struct CovPoint {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();    // world frame
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // world frame
+};
+
+struct Plane {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, smallest-eigenvalue eigenvector
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double d = 0.0;                                         // n.x + d = 0 on the plane
+  Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();  // ascending
+  double radius = 0.0;                                    // sqrt(largest eigenvalue)
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();  // over (n, q)
+  int points = 0;
+  bool is_plane = false;
+};
+
+// Fits `points`; is_plane = smallest eigenvalue < min_eigen_value. Needs >= 3 points.
+Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value);
+
+// Signed point-to-plane distance and its variance (plane uncertainty + point uncertainty):
+//   sigma^2 = J cov J^T + n^T S_p n,  J = [(p - q)^T, -n^T]
+struct PlaneResidual {
+  double distance = 0.0;
+  double variance = 0.0;
+};
+PlaneResidual plane_residual(const Plane& plane, const Eigen::Vector3d& p,
+                             const Eigen::Matrix3d& point_cov);
+
+// The Jacobian of (n, q) with respect to point j (for tests and diagnostics).
+Eigen::Matrix<double, 6, 3> plane_jacobian(const std::vector<CovPoint>& points, const Plane& plane,
+                                           std::size_t j);
+
+}  // namespace livod::estimator

@@ -1,0 +1,98 @@
+#pragma once
+// Estimator parameters: plain structs with in-class defaults. Names follow FAST-LIVO2 where that
+// system has the parameter; defaults are its shipped avia.yaml (the hand-held Livox Avia rig), see
+// docs/configuration.md for every value, its unit and its origin. Constants that FAST-LIVO2
+// hard-codes (plane refit size, visual voxel size, observation limits, ...) are parameters here.
+//
+// This header must not depend on the configuration loader or on YAML: the daemon fills these
+// structs from the config file, tests and benchmarks fill them in code.
+
+#include <vector>
+
+namespace livod::estimator {
+
+// Motion check during IMU initialisation (FAST-LIVO2 has none and silently assumes a static
+// start). The initialisation window restarts while the platform moves.
+struct StaticCheckParams {
+  bool enabled = true;
+  double max_acc_std_m_s2 = 0.2;     // std of |accel| over the window
+  double max_gyro_std_rad_s = 0.05;  // std of each gyro axis over the window
+};
+
+struct ImuParams {
+  // Continuous-time process noise scales of the propagation (FAST-LIVO2 acc_cov, gyr_cov).
+  double acc_cov = 0.5;  // (m/s^2)^2
+  double gyr_cov = 0.3;  // (rad/s)^2
+  // Bias random walks. FAST-LIVO2 hard-codes 1e-4 and ignores these keys; here they are used.
+  double b_acc_cov = 1e-4;
+  double b_gyr_cov = 1e-4;
+  // Initialisation window: a number of IMU samples (FAST-LIVO2 imu_int_frame), or, when
+  // init_time_s > 0, a duration (independent of the IMU rate).
+  int init_samples = 30;
+  double init_time_s = 0.0;
+  StaticCheckParams static_check;
+  // Start the gyro bias at the mean gyro of the (static) init window instead of zero.
+  bool init_gyro_bias = true;
+  bool gravity_align = false;  // rotate the world so that gravity is -z at start
+  bool gravity_est = true;     // estimate gravity in the filter (FAST-LIVO2 gravity_est_en)
+  bool bias_est = true;        // estimate b_g and b_a (FAST-LIVO2 ba_bg_est_en)
+  double gravity_m_s2 = 9.81;  // magnitude the initial gravity is scaled to
+};
+
+// Iteration stops when one update step moves the state less than this.
+struct ConvergenceParams {
+  double rotation_deg = 0.01;
+  double translation_m = 0.00015;
+};
+
+struct LioParams {
+  int max_iterations = 5;
+  double dept_err = 0.02;           // range noise sigma (m)
+  double beam_err_deg = 0.05;       // bearing noise sigma (deg)
+  double min_eigen_value = 0.0025;  // planarity: smallest eigenvalue (m^2) below this
+  double sigma_num = 3.0;           // association gate, in sigmas
+  double voxel_size = 0.5;          // root voxel edge (m)
+  int max_layer = 2;                // octree depth below the root voxel
+  int max_points_num = 50;          // a plane freezes after this many points
+  std::vector<int> layer_init_num = {5, 5, 5, 5, 5};  // points to fit a plane, per layer
+  int plane_update_points = 5;    // new points that trigger a plane refit (hard-coded upstream)
+  int point_filter_num = 1;       // keep every n-th point
+  double blind = 0.8;             // minimum range (m)
+  double filter_size_surf = 0.1;  // scan voxel-grid downsampling (m); 0 disables
+  ConvergenceParams convergence;
+};
+
+// The voxel map slides with the robot so that memory stays bounded.
+struct MapParams {
+  bool sliding = true;
+  double half_extent_m = 50.0;     // voxels farther than this from the robot (per axis) go
+  double slide_threshold_m = 8.0;  // re-centre after moving this far
+};
+
+struct VioParams {
+  bool enabled = true;                // use cameras when the configuration has one
+  int max_iterations = 5;             // per pyramid level
+  double outlier_threshold = 1000.0;  // per-pixel mean squared photometric error gate
+  double img_point_cov = 100.0;       // photometric noise variance (grey levels^2)
+  int patch_size = 8;                 // patch edge (px)
+  int pyramid_levels = 3;             // image pyramid levels used by the update
+  bool normal_en = true;              // warp patches by the plane-induced homography
+  bool exposure_estimate = true;
+  double inv_expo_cov = 0.1;           // inverse-exposure random walk
+  int grid_cell_px = 30;               // one visual point per grid cell (cell edge in px)
+  int max_visual_points = 20000;       // the visual map is bounded (FAST-LIVO2's grows forever)
+  int max_observations = 30;           // patches kept per visual point
+  double visual_voxel_size = 0.5;      // visual map voxel edge (m), hard-coded upstream
+  double depth_discontinuity_m = 0.5;  // reject points near a LiDAR depth jump
+  // LIO runs alone, at LiDAR rate, when no image arrives within this time after a scan.
+  double image_timeout_s = 0.15;
+};
+
+struct EstimatorParams {
+  ImuParams imu;
+  LioParams lio;
+  MapParams map;
+  VioParams vio;
+};
+
+}  // namespace livod::estimator

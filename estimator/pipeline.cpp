@@ -1,0 +1,240 @@
+#include "estimator/pipeline.hpp"
+
+#include <chrono>
+
+#include "core/so3.hpp"
+#include "estimator/imu/propagation.hpp"
+
+namespace livod::estimator {
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+IterationParams iteration_params(const LioParams& lio) {
+  IterationParams p;
+  p.max_iterations = lio.max_iterations;
+  p.converged_rotation_rad = lio.convergence.rotation_deg * M_PI / 180.0;
+  p.converged_translation_m = lio.convergence.translation_m;
+  return p;
+}
+
+PointNoise point_noise(const LioParams& lio) {
+  PointNoise n;
+  n.range_sigma_m = lio.dept_err;
+  n.bearing_sigma_rad = lio.beam_err_deg * M_PI / 180.0;
+  return n;
+}
+
+}  // namespace
+
+LioPipeline::LioPipeline(PipelineOptions options)
+    : options_(std::move(options)),
+      initializer_(options_.params.imu),
+      map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
+      downsampler_(options_.params.lio.filter_size_surf) {
+  p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.threads);
+}
+
+LioPipeline::~LioPipeline() = default;
+
+void LioPipeline::add_imu(const ImuSample& sample) {
+  ++counters_.imu_in;
+  const MappedTime last = !imu_.empty()    ? imu_.back().stamp.mapped
+                          : have_prev_imu_ ? prev_imu_.stamp.mapped
+                                           : MappedTime(std::numeric_limits<std::int64_t>::min());
+  if (sample.stamp.mapped <= last) {
+    ++counters_.imu_out_of_order;
+    return;
+  }
+  if (!initializer_.done()) {
+    if (initializer_.add(sample)) {
+      belief_ = *initializer_.result();
+      state_time_ = initializer_.time();
+      prev_imu_ = sample;
+      have_prev_imu_ = true;
+    }
+    return;
+  }
+  imu_.push_back(sample);
+  if (imu_.size() > options_.max_queued_imu) {
+    imu_.pop_front();
+    ++counters_.imu_queue_overflow;
+  }
+}
+
+void LioPipeline::add_scan(const LidarScan& scan) {
+  ++counters_.scans_in;
+  if (scan.empty()) return;
+  std::int32_t last = 0;
+  for (const auto t : scan.t_offset_ns) last = std::max(last, t);
+  const MappedTime end = scan.start.mapped + Nanoseconds(last);
+  if (!initializer_.done() || end <= state_time_) {
+    if (!initializer_.done())
+      ++counters_.scans_before_init;
+    else
+      ++counters_.scans_out_of_order;
+    return;
+  }
+  if (!scans_.empty() && end <= scans_.back().end) {
+    ++counters_.scans_out_of_order;
+    return;
+  }
+  scans_.push_back(QueuedScan{scan, end});
+  if (scans_.size() > options_.max_queued_scans) {
+    scans_.pop_front();
+    ++counters_.scans_queue_overflow;
+  }
+}
+
+void LioPipeline::process(const std::function<void(const PipelineOutput&)>& on_output) {
+  while (!scans_.empty() && !imu_.empty() && imu_.back().stamp.mapped >= scans_.front().end) {
+    const QueuedScan q = std::move(scans_.front());
+    scans_.pop_front();
+    process_scan(q, on_output);
+  }
+}
+
+void LioPipeline::propagate_to(MappedTime t_end, ImuPoseTrack& track) {
+  const auto& ip = options_.params.imu;
+  const double inv_expo_cov = options_.params.vio.inv_expo_cov;
+  track.clear();
+  auto push_pose = [&](const ImuReading& m) {
+    ImuPose pose;
+    pose.t = state_time_;
+    pose.R_world_imu = belief_.x.R_world_imu;
+    pose.p_world_imu = belief_.x.p_world_imu;
+    pose.v_world = belief_.x.v_world;
+    pose.omega_imu = m.gyro_rad_s - belief_.x.bias_gyro;
+    pose.acc_world =
+        belief_.x.R_world_imu * (m.accel_m_s2 - belief_.x.bias_accel) + belief_.x.gravity_world;
+    track.push(pose);
+  };
+  while (!imu_.empty() && imu_.front().stamp.mapped <= t_end) {
+    const ImuSample s = imu_.front();
+    imu_.pop_front();
+    const double dt = to_seconds(s.stamp.mapped - state_time_);
+    if (dt <= 0.0) {
+      prev_imu_ = s;
+      continue;
+    }
+    const ImuReading m{0.5 * (prev_imu_.gyro_rad_s + s.gyro_rad_s),
+                       0.5 * (prev_imu_.accel_m_s2 + s.accel_m_s2)};
+    push_pose(m);
+    propagate(belief_, m, dt, ip, inv_expo_cov);
+    state_time_ = s.stamp.mapped;
+    prev_imu_ = s;
+  }
+  // The last interval is cut at the scan end, interpolating the next sample to that time.
+  const double dt = to_seconds(t_end - state_time_);
+  if (dt > 0.0) {
+    ImuReading m{prev_imu_.gyro_rad_s, prev_imu_.accel_m_s2};
+    if (!imu_.empty()) {
+      const ImuSample& next = imu_.front();
+      const double span = to_seconds(next.stamp.mapped - prev_imu_.stamp.mapped);
+      const double a = span > 0.0 ? to_seconds(t_end - prev_imu_.stamp.mapped) / span : 0.0;
+      const Eigen::Vector3d g_end =
+          prev_imu_.gyro_rad_s + a * (next.gyro_rad_s - prev_imu_.gyro_rad_s);
+      const Eigen::Vector3d a_end =
+          prev_imu_.accel_m_s2 + a * (next.accel_m_s2 - prev_imu_.accel_m_s2);
+      // Mean over [state_time_, t_end] of the linear interpolation between the two samples.
+      const double a0 = span > 0.0 ? to_seconds(state_time_ - prev_imu_.stamp.mapped) / span : 0.0;
+      const Eigen::Vector3d g_start =
+          prev_imu_.gyro_rad_s + a0 * (next.gyro_rad_s - prev_imu_.gyro_rad_s);
+      const Eigen::Vector3d a_start =
+          prev_imu_.accel_m_s2 + a0 * (next.accel_m_s2 - prev_imu_.accel_m_s2);
+      m = ImuReading{0.5 * (g_start + g_end), 0.5 * (a_start + a_end)};
+    }
+    push_pose(m);
+    propagate(belief_, m, dt, ip, inv_expo_cov);
+    state_time_ = t_end;
+  }
+  push_pose(ImuReading{prev_imu_.gyro_rad_s, prev_imu_.accel_m_s2});
+}
+
+void LioPipeline::process_scan(const QueuedScan& q,
+                               const std::function<void(const PipelineOutput&)>& on_output) {
+  const auto t_total = std::chrono::steady_clock::now();
+  const auto& lio = options_.params.lio;
+  FrameReport report;
+  report.t = q.end;
+  report.scan_sequence = q.scan.sequence;
+  report.raw_points = static_cast<int>(q.scan.size());
+
+  auto t0 = std::chrono::steady_clock::now();
+  propagate_to(q.end, track_);
+  report.timings.propagate_ms = ms_since(t0);
+
+  // Select points: valid, beyond the blind range, every point_filter_num-th.
+  t0 = std::chrono::steady_clock::now();
+  indices_.clear();
+  const double blind2 = lio.blind * lio.blind;
+  const int stride = std::max(1, lio.point_filter_num);
+  int k = 0;
+  for (std::uint32_t i = 0; i < q.scan.size(); ++i) {
+    if (!q.scan.valid[i]) continue;
+    if (k++ % stride != 0) continue;
+    if (q.scan.point(i).cast<double>().squaredNorm() < blind2) continue;
+    indices_.push_back(i);
+  }
+  undistort_points(track_, options_.T_imu_lidar, q.end, q.scan, indices_, undistorted_);
+  report.timings.undistort_ms = ms_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  downsampler_.apply(undistorted_);
+  report.timings.downsample_ms = ms_since(t0);
+  report.used_points = static_cast<int>(undistorted_.size());
+
+  const PointNoise noise = point_noise(lio);
+  scan_points_.resize(undistorted_.size());
+  for (std::size_t i = 0; i < undistorted_.size(); ++i) {
+    scan_points_[i].p_lidar = undistorted_[i];
+    scan_points_[i].cov_lidar = point_covariance(undistorted_[i], noise);
+  }
+
+  t0 = std::chrono::steady_clock::now();
+  if (!map_->empty()) {
+    const UpdateReport u = iterated_update(
+        belief_,
+        [&](const State& x, NormalEquations& eq) {
+          return p2p_->linearize(scan_points_, x, eq, options_.min_matches);
+        },
+        iteration_params(lio));
+    report.iterations = u.iterations;
+    report.converged = u.converged;
+    report.matched = p2p_->stats().matched;
+    report.updated = u.iterations > 0 && report.matched >= options_.min_matches;
+    if (report.updated) {
+      report.degeneracy = assess_degeneracy(u.information, options_.degeneracy_ratio);
+      if (report.degeneracy.degenerate) ++counters_.degenerate_frames;
+    }
+  }
+  if (!report.updated) ++counters_.frames_without_update;
+  report.timings.update_ms = ms_since(t0);
+
+  // Map insertion with world covariances (point + pose uncertainty, FAST-LIVO2 1.3).
+  t0 = std::chrono::steady_clock::now();
+  const Eigen::Matrix3d R = belief_.x.R_world_imu;
+  const Eigen::Matrix3d R_wl = R * options_.T_imu_lidar.linear();
+  const Eigen::Matrix3d P_rot = belief_.P.block<3, 3>(kRot, kRot);
+  const Eigen::Matrix3d P_pos = belief_.P.block<3, 3>(kPos, kPos);
+  world_points_.resize(scan_points_.size());
+  for (std::size_t i = 0; i < scan_points_.size(); ++i) {
+    const Eigen::Vector3d p_i = options_.T_imu_lidar * scan_points_[i].p_lidar;
+    const Eigen::Matrix3d J_rot = -R * so3::hat(p_i);
+    world_points_[i].p = R * p_i + belief_.x.p_world_imu;
+    world_points_[i].cov = R_wl * scan_points_[i].cov_lidar * R_wl.transpose() +
+                           J_rot * P_rot * J_rot.transpose() + P_pos;
+  }
+  map_->insert(world_points_);
+  map_->slide(belief_.x.p_world_imu);
+  report.timings.map_ms = ms_since(t0);
+  report.map = map_->stats();
+  report.timings.total_ms = ms_since(t_total);
+  ++counters_.scans_processed;
+
+  if (on_output) on_output(PipelineOutput{q.end, belief_.x, belief_.P, report});
+}
+
+}  // namespace livod::estimator

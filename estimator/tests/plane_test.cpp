@@ -1,0 +1,127 @@
+#include "estimator/map/plane.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <random>
+
+#include "estimator/map/point_covariance.hpp"
+
+namespace livod::estimator {
+namespace {
+
+std::vector<CovPoint> noisy_plane(std::mt19937& rng, int n, double thickness) {
+  std::uniform_real_distribution<double> u(-0.25, 0.25);
+  std::normal_distribution<double> g(0.0, thickness);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  std::vector<CovPoint> pts;
+  for (int i = 0; i < n; ++i) {
+    CovPoint c;
+    c.p = R * Eigen::Vector3d(u(rng), 0.6 * u(rng), g(rng)) + Eigen::Vector3d(3, -1, 2);
+    c.cov = Eigen::Matrix3d::Identity() * 1e-4;
+    c.cov(0, 1) = c.cov(1, 0) = 2e-5;
+    pts.push_back(c);
+  }
+  return pts;
+}
+
+// d(n, q)/d p_j against central differences (the eigenvector sign is aligned first).
+TEST(Plane, NormalAndCentreJacobiansMatchFiniteDifferences) {
+  std::mt19937 rng(5);
+  const auto pts = noisy_plane(rng, 20, 0.01);
+  const Plane plane = fit_plane(pts, 0.01);
+  ASSERT_TRUE(plane.is_plane);
+  const double h = 1e-7;
+  for (std::size_t j : {0u, 7u, 19u}) {
+    const Eigen::Matrix<double, 6, 3> J = plane_jacobian(pts, plane, j);
+    for (int c = 0; c < 3; ++c) {
+      auto plus = pts;
+      auto minus = pts;
+      plus[j].p[c] += h;
+      minus[j].p[c] -= h;
+      Plane a = fit_plane(plus, 1.0);
+      Plane b = fit_plane(minus, 1.0);
+      if (a.normal.dot(plane.normal) < 0) a.normal = -a.normal;
+      if (b.normal.dot(plane.normal) < 0) b.normal = -b.normal;
+      Eigen::Matrix<double, 6, 1> fd;
+      fd.head<3>() = (a.normal - b.normal) / (2 * h);
+      fd.tail<3>() = (a.center - b.center) / (2 * h);
+      EXPECT_LT((J.col(c) - fd).norm(), 1e-5 * (1.0 + fd.norm()))
+          << "point " << j << " axis " << c << "\nJ " << J.col(c).transpose() << "\nfd "
+          << fd.transpose();
+    }
+  }
+}
+
+// The propagated covariance matches the Monte-Carlo spread of refits under the point noise.
+TEST(Plane, PropagatedCovarianceMatchesMonteCarlo) {
+  std::mt19937 rng(6);
+  const auto pts = noisy_plane(rng, 30, 0.005);
+  const Plane plane = fit_plane(pts, 0.01);
+  ASSERT_TRUE(plane.is_plane);
+  std::vector<Eigen::Matrix<double, 6, 1>> samples;
+  for (int trial = 0; trial < 4000; ++trial) {
+    auto noisy = pts;
+    for (auto& p : noisy) {
+      const Eigen::LLT<Eigen::Matrix3d> llt(p.cov);
+      std::normal_distribution<double> g(0.0, 1.0);
+      p.p += llt.matrixL() * Eigen::Vector3d(g(rng), g(rng), g(rng));
+    }
+    Plane f = fit_plane(noisy, 1.0);
+    if (f.normal.dot(plane.normal) < 0) f.normal = -f.normal;
+    Eigen::Matrix<double, 6, 1> s;
+    s << f.normal, f.center;
+    samples.push_back(s);
+  }
+  Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero();
+  for (const auto& s : samples) mean += s;
+  mean /= static_cast<double>(samples.size());
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();
+  for (const auto& s : samples) cov += (s - mean) * (s - mean).transpose();
+  cov /= static_cast<double>(samples.size() - 1);
+  // Compare the variance of the point-to-plane distance at a test point, the quantity the filter
+  // uses, within 15 %.
+  const Eigen::Vector3d x = plane.center + Eigen::Vector3d(0.2, -0.1, 0.05);
+  Eigen::Matrix<double, 1, 6> J;
+  J << (x - plane.center).transpose(), -plane.normal.transpose();
+  const double predicted = (J * plane.cov * J.transpose())(0, 0);
+  const double observed = (J * cov * J.transpose())(0, 0);
+  EXPECT_NEAR(predicted / observed, 1.0, 0.15);
+}
+
+TEST(Plane, RejectsNonPlanarSetsAndComputesResiduals) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::vector<CovPoint> blob;
+  for (int i = 0; i < 30; ++i)
+    blob.push_back({Eigen::Vector3d(u(rng), u(rng), u(rng)), Eigen::Matrix3d::Identity() * 1e-4});
+  EXPECT_FALSE(fit_plane(blob, 0.0025).is_plane);
+  const auto pts = noisy_plane(rng, 30, 0.002);
+  const Plane plane = fit_plane(pts, 0.0025);
+  ASSERT_TRUE(plane.is_plane);
+  const Eigen::Vector3d off = plane.center + 0.3 * plane.normal;
+  const auto r = plane_residual(plane, off, Eigen::Matrix3d::Identity() * 1e-4);
+  EXPECT_NEAR(r.distance, 0.3, 1e-9);
+  EXPECT_GT(r.variance, 1e-4);  // at least the point's own variance along n
+}
+
+TEST(PointCovariance, RangeAlongTheRayBearingAcrossIt) {
+  PointNoise noise;
+  noise.range_sigma_m = 0.02;
+  noise.bearing_sigma_rad = 0.001;
+  const Eigen::Vector3d p(10.0, 0.0, 0.0);
+  const Eigen::Matrix3d S = point_covariance(p, noise);
+  EXPECT_NEAR(S(0, 0), 0.02 * 0.02, 1e-12);
+  EXPECT_NEAR(S(1, 1), std::pow(10.0 * std::sin(0.001), 2), 1e-12);
+  EXPECT_NEAR(S(2, 2), std::pow(10.0 * std::sin(0.001), 2), 1e-12);
+  // Grazing incidence inflates the range variance.
+  const Eigen::Matrix3d S_inc = point_covariance(p, noise, Eigen::Vector3d(0.2, 1.0, 0.0));
+  EXPECT_GT(S_inc(0, 0), S(0, 0) * 5);
+  const Eigen::Matrix3d S_head_on = point_covariance(p, noise, Eigen::Vector3d(-1.0, 0.0, 0.0));
+  EXPECT_NEAR(S_head_on(0, 0), S(0, 0), 1e-12);
+}
+
+}  // namespace
+}  // namespace livod::estimator

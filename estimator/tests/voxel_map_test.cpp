@@ -1,0 +1,105 @@
+#include "estimator/map/voxel_map.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <random>
+
+namespace livod::estimator {
+namespace {
+
+std::vector<CovPoint> sample_plane(std::mt19937& rng, const Eigen::Vector3d& origin,
+                                   const Eigen::Vector3d& u, const Eigen::Vector3d& v, int n,
+                                   double noise) {
+  std::uniform_real_distribution<double> a(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, noise);
+  const Eigen::Vector3d normal = u.cross(v).normalized();
+  std::vector<CovPoint> out;
+  for (int i = 0; i < n; ++i) {
+    CovPoint p;
+    p.p = origin + a(rng) * u + a(rng) * v + g(rng) * normal;
+    p.cov = Eigen::Matrix3d::Identity() * noise * noise;
+    out.push_back(p);
+  }
+  return out;
+}
+
+TEST(VoxelMap, KeysAreATrueFloor) {
+  EXPECT_EQ(voxel_key({-1.0, 0.0, 0.49}, 0.5), (VoxelKey{-2, 0, 0}));
+  EXPECT_EQ(voxel_key({-0.01, 0.5, -0.5}, 0.5), (VoxelKey{-1, 1, -1}));
+}
+
+TEST(VoxelMap, MatchesPointsToTheirPlaneAndRejectsOutliers) {
+  LioParams lio;
+  MapParams map;
+  VoxelMap vm(lio, map);
+  std::mt19937 rng(2);
+  // A floor (z = 0) and a wall (x = 2), 4 m wide, with 1 cm noise.
+  vm.insert(sample_plane(rng, {-2, -2, 0}, {4, 0, 0}, {0, 4, 0}, 20000, 0.01));
+  vm.insert(sample_plane(rng, {2, -2, 0}, {0, 4, 0}, {0, 0, 3}, 20000, 0.01));
+  const auto stats = vm.stats();
+  EXPECT_GT(stats.planes, 100u);
+  const Eigen::Matrix3d cov = Eigen::Matrix3d::Identity() * 1e-4;
+  PlaneMatch m;
+  ASSERT_TRUE(vm.match({0.3, 0.7, 0.02}, cov, m));
+  EXPECT_GT(std::abs(m.plane->normal.z()), 0.99);
+  EXPECT_NEAR(std::abs(m.distance), 0.02, 0.01);
+  ASSERT_TRUE(vm.match({1.97, 0.4, 1.3}, cov, m));
+  EXPECT_GT(std::abs(m.plane->normal.x()), 0.99);
+  EXPECT_NEAR(std::abs(m.distance), 0.03, 0.01);
+  // 20 cm off the floor inside its voxel: far beyond 3 sigma.
+  EXPECT_FALSE(vm.match({0.3, 0.7, 0.2}, cov, m));
+  // In empty space.
+  EXPECT_FALSE(vm.match({0.0, 0.0, 1.5}, cov, m));
+}
+
+TEST(VoxelMap, NeighbourFallbackUsesVoxelUnits) {
+  LioParams lio;
+  lio.voxel_size = 1.0;
+  MapParams map;
+  VoxelMap vm(lio, map);
+  std::mt19937 rng(3);
+  // A plane at z = 0.95 filling voxel z-index 0 only (x, y in [10, 11)).
+  vm.insert(sample_plane(rng, {10.0, 10.0, 0.95}, {0.999, 0, 0}, {0, 0.999, 0}, 200, 0.002));
+  PlaneMatch m;
+  // A point at z = 1.0 lies in voxel z-index 1 (empty), 0.0 above its floor face: the fallback
+  // must look down into voxel 0 and match the plane 5 cm below.
+  ASSERT_TRUE(vm.match({10.5, 10.5, 1.0}, Eigen::Matrix3d::Identity() * 1e-3, m));
+  EXPECT_NEAR(std::abs(m.distance), 0.05, 0.01);
+  // Near the top face of voxel 1 the fallback looks up, not down: no match.
+  EXPECT_FALSE(vm.match({10.5, 10.5, 1.9}, Eigen::Matrix3d::Identity() * 1e-3, m));
+}
+
+TEST(VoxelMap, PlanesFreezeAndTheMapSlidesSoMemoryIsBounded) {
+  LioParams lio;
+  MapParams map;
+  map.half_extent_m = 20.0;
+  map.slide_threshold_m = 5.0;
+  VoxelMap vm(lio, map);
+  std::mt19937 rng(4);
+  std::size_t peak_bytes = 0;
+  for (int step = 0; step < 60; ++step) {
+    const double x = step * 5.0;  // drive 300 m along a corridor-like floor
+    // Three scans see the new stretch of floor (mid-voxel height, so each voxel gets them all).
+    for (int scan = 0; scan < 3; ++scan) {
+      vm.insert(sample_plane(rng, {x, -5, 0.25}, {5, 0, 0}, {0, 10, 0}, 8000, 0.01));
+    }
+    vm.slide({x, 0, 1});
+    peak_bytes = std::max(peak_bytes, vm.stats().bytes);
+    if (step == 10) {
+      // After warm-up the footprint must stay flat: compare later peaks against this one.
+      EXPECT_GT(vm.stats().frozen_nodes, 0u);
+    }
+  }
+  const auto s = vm.stats();
+  EXPECT_GT(s.removed_voxels, 0u);
+  // Everything left lies within the extent (+ one voxel) of the last position.
+  EXPECT_LE(s.root_voxels, static_cast<std::size_t>((2 * 41 + 1) * (2 * 41 + 1) * 3));
+  // Frozen planes released their points: far fewer points stored than the 8 x 24000 inserted
+  // within the extent.
+  EXPECT_LT(s.stored_points, 24000u);
+  EXPECT_LT(peak_bytes, 64u * 1024 * 1024);
+}
+
+}  // namespace
+}  // namespace livod::estimator
