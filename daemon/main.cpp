@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   livod::daemon::CommandContext ctx;
   livod::daemon::add_version_command(app, ctx);
   // COMMAND-REGISTRATIONS (one line per subcommand; keep sorted)
+  livod::daemon::add_eval_command(app, ctx);
 
   app.parse_complete_callback([&log_config] {
     if (!livod::daemon::init_logging(log_config)) {

@@ -15,5 +15,6 @@ struct CommandContext {
 
 void add_version_command(CLI::App& app, CommandContext& ctx);
 // COMMAND-DECLARATIONS (one line per subcommand; keep sorted)
+void add_eval_command(CLI::App& app, CommandContext& ctx);
 
 }  // namespace livod::daemon
