@@ -10,7 +10,10 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
+
+#include "io/ipv4_reassembly.hpp"
 
 namespace livod::io {
 
@@ -21,7 +24,7 @@ struct UdpDatagram {
   std::uint32_t dst_ip = 0;          // host byte order
   std::uint16_t src_port = 0;
   std::uint16_t dst_port = 0;
-  std::uint64_t record_index = 0;    // 0-based index of the pcap record that completed it
+  std::uint64_t record_index = 0;      // 0-based index of the pcap record that completed it
   std::span<const std::byte> payload;  // valid until the next call to next()
 };
 
@@ -34,13 +37,28 @@ struct PcapStats {
   std::uint64_t incomplete_fragments = 0;  // fragment sets never completed (dropped)
   std::uint64_t malformed = 0;             // truncated/inconsistent headers (counted and skipped)
   std::uint64_t filtered = 0;              // datagrams dropped by the port filter
+  // Unfragmented IPv4 packets whose total-length field exceeded the (complete) frame; they were
+  // read up to the frame end, the UDP length still had to fit (VLP-16 position packets say 1234).
+  std::uint64_t ip_length_clamped = 0;
+  // Earliest and latest valid record time seen (UTC epoch ns); 0 until a record was read.
+  std::int64_t min_record_time_ns = 0;
+  std::int64_t max_record_time_ns = 0;
 };
 
+// Link types handled: Ethernet (with up to 8 stacked 802.1Q/802.1ad VLAN tags), Linux cooked SLL
+// and SLL2, raw IP (DLT_RAW, DLT_IPV4) and BSD loopback (DLT_NULL, DLT_LOOP). Records of any other
+// link type are counted in non_udp. IPv4 and UDP checksums are not verified: captures taken on the
+// sending host carry unfinished checksums when the NIC offloads them. Fragments are reassembled
+// with an Ipv4Reassembler (bounded, see io/ipv4_reassembly.hpp); sets still open at the end of
+// the file count as incomplete_fragments, fragments that are invalid or contradict their set as
+// malformed.
 class PcapReader {
  public:
   // Opens a pcap or pcapng file (libpcap detects which). Throws livod::Error with the path and the
   // libpcap message if it cannot be opened or is not a capture file.
   explicit PcapReader(const std::filesystem::path& path);
+  // Reads a capture held in memory (the bytes are copied; `name` appears in error messages).
+  static PcapReader from_memory(std::span<const std::byte> bytes, std::string name = "<memory>");
   ~PcapReader();
   PcapReader(PcapReader&&) noexcept;
   PcapReader& operator=(PcapReader&&) noexcept;
@@ -60,13 +78,29 @@ class PcapReader {
 
   [[nodiscard]] const PcapStats& stats() const;
 
+  // Replaces the fragment table (pending sets are dropped and counted as incomplete).
+  void set_reassembly_limits(const Ipv4ReassemblyLimits& limits);
+  [[nodiscard]] const Ipv4ReassemblyStats& reassembly_stats() const;
+
+  [[nodiscard]] int link_type() const;               // libpcap DLT_* value
+  [[nodiscard]] std::string link_type_name() const;  // e.g. "EN10MB", "LINUX_SLL2"
+  [[nodiscard]] bool is_pcapng() const;
+  // Why reading stopped before a clean end of file (libpcap's message and the byte offset), or
+  // empty. Set together with the malformed count for a truncated or corrupt record.
+  [[nodiscard]] const std::string& end_error() const;
+
  private:
   struct Impl;
+  explicit PcapReader(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
 
 // Writes Ethernet/IPv4/UDP records to a classic pcap file (microsecond or nanosecond resolution).
-// Datagrams larger than `mtu` are split into IPv4 fragments, as a real network would.
+// Datagrams larger than `mtu` are split into IPv4 fragments, as a real network would. Writing is
+// classic pcap only (no pcapng). IPv4 header and UDP checksums are correct; each datagram gets the
+// next IPv4 identification; MAC addresses are synthesised from the IP addresses (02:00:a.b.c.d,
+// or the IPv4 multicast/broadcast MAC); frames shorter than 60 bytes are zero-padded like on the
+// wire. With microsecond resolution record times are truncated to whole microseconds.
 class PcapWriter {
  public:
   struct Options {
@@ -81,8 +115,12 @@ class PcapWriter {
   PcapWriter(const PcapWriter&) = delete;
   PcapWriter& operator=(const PcapWriter&) = delete;
 
+  // Throws std::invalid_argument if the payload exceeds 65507 bytes (the UDP/IPv4 maximum) or the
+  // time does not fit a pcap record (before 1970 or after 2106); Options are checked by the
+  // constructor (68 <= mtu <= 65535).
   void write_udp(std::int64_t capture_time_ns, std::uint32_t src_ip, std::uint16_t src_port,
                  std::uint32_t dst_ip, std::uint16_t dst_port, std::span<const std::byte> payload);
+  // Throws livod::Error if the data could not be written.
   void flush();
 
  private:

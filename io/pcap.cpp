@@ -1,0 +1,595 @@
+#include "io/pcap.hpp"
+
+#include <pcap/pcap.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace livod::io {
+
+namespace {
+
+constexpr std::uint16_t kEthertypeIpv4 = 0x0800;
+constexpr std::uint16_t kEthertypeVlan = 0x8100;     // 802.1Q
+constexpr std::uint16_t kEthertypeQinQ = 0x88A8;     // 802.1ad service tag
+constexpr std::uint16_t kEthertypeQinQOld = 0x9100;  // pre-standard double tagging
+constexpr std::size_t kMaxVlanTags = 8;              // bound on the tag loop; real stacks use 2
+constexpr std::size_t kEthernetHeader = 14;
+constexpr std::size_t kVlanTag = 4;
+constexpr std::size_t kSllHeader = 16;
+constexpr std::size_t kSll2Header = 20;
+constexpr std::size_t kNullHeader = 4;
+constexpr std::uint32_t kAfInet = 2;  // AF_INET in every BSD loopback header
+constexpr std::size_t kIpv4MinHeader = 20;
+constexpr std::uint8_t kIpProtoUdp = 17;
+constexpr std::uint16_t kIpMoreFragments = 0x2000;
+constexpr std::uint16_t kIpOffsetMask = 0x1FFF;
+constexpr std::size_t kUdpHeader = 8;
+constexpr std::size_t kMaxUdpPayload = 65535 - kIpv4MinHeader - kUdpHeader;
+constexpr std::size_t kMinEthernetFrame = 60;  // without FCS; shorter frames are padded
+constexpr std::size_t kMinIpv4Mtu = 68;        // RFC 791: every host must accept this
+constexpr std::size_t kMaxIpv4Mtu = 65535;
+constexpr int kWriterSnaplen = 262144;  // libpcap's MAXIMUM_SNAPLEN
+constexpr std::int64_t kNsPerSecond = 1'000'000'000;
+
+std::uint16_t be16(std::span<const std::byte> b, std::size_t at) {
+  return static_cast<std::uint16_t>((std::to_integer<unsigned>(b[at]) << 8) |
+                                    std::to_integer<unsigned>(b[at + 1]));
+}
+
+std::uint32_t be32(std::span<const std::byte> b, std::size_t at) {
+  return (std::uint32_t{be16(b, at)} << 16) | be16(b, at + 2);
+}
+
+std::uint32_t le32(std::span<const std::byte> b, std::size_t at) {
+  return std::to_integer<std::uint32_t>(b[at]) | (std::to_integer<std::uint32_t>(b[at + 1]) << 8) |
+         (std::to_integer<std::uint32_t>(b[at + 2]) << 16) |
+         (std::to_integer<std::uint32_t>(b[at + 3]) << 24);
+}
+
+void put16(std::byte* out, std::uint16_t v) {
+  out[0] = static_cast<std::byte>(v >> 8);
+  out[1] = static_cast<std::byte>(v & 0xFF);
+}
+
+void put32(std::byte* out, std::uint32_t v) {
+  put16(out, static_cast<std::uint16_t>(v >> 16));
+  put16(out + 2, static_cast<std::uint16_t>(v & 0xFFFF));
+}
+
+// Internet checksum (RFC 1071) accumulation over big-endian 16-bit words.
+std::uint32_t checksum_add(std::uint32_t sum, std::span<const std::byte> bytes) {
+  std::size_t i = 0;
+  for (; i + 1 < bytes.size(); i += 2) sum += be16(bytes, i);
+  if (i < bytes.size()) sum += std::to_integer<std::uint32_t>(bytes[i]) << 8;
+  return sum;
+}
+
+std::uint16_t checksum_finish(std::uint32_t sum) {
+  while ((sum >> 16) != 0) sum = (sum & 0xFFFF) + (sum >> 16);
+  return static_cast<std::uint16_t>(~sum & 0xFFFF);
+}
+
+// What the link layer carried: an IPv4 packet, something else, or a header that does not fit.
+enum class LinkResult { ipv4, other, malformed };
+
+// Skips 802.1Q / 802.1ad tags starting at `pos` (which points after an ethertype that was a tag
+// type); returns the inner ethertype and moves `pos` past the tags.
+LinkResult skip_vlan_tags(std::span<const std::byte> frame, std::uint16_t& ethertype,
+                          std::size_t& pos) {
+  std::size_t tags = 0;
+  while (ethertype == kEthertypeVlan || ethertype == kEthertypeQinQ ||
+         ethertype == kEthertypeQinQOld) {
+    if (++tags > kMaxVlanTags || pos + kVlanTag > frame.size()) return LinkResult::malformed;
+    ethertype = be16(frame, pos + 2);
+    pos += kVlanTag;
+  }
+  return ethertype == kEthertypeIpv4 ? LinkResult::ipv4 : LinkResult::other;
+}
+
+// Finds the IPv4 packet inside one record of link type `dlt`.
+LinkResult locate_ipv4(int dlt, std::span<const std::byte> frame,
+                       std::span<const std::byte>& ipv4) {
+  std::size_t pos = 0;
+  LinkResult result = LinkResult::other;
+  switch (dlt) {
+    case DLT_EN10MB: {
+      if (frame.size() < kEthernetHeader) return LinkResult::malformed;
+      std::uint16_t ethertype = be16(frame, 12);
+      pos = kEthernetHeader;
+      result = skip_vlan_tags(frame, ethertype, pos);
+      break;
+    }
+    case DLT_LINUX_SLL: {
+      if (frame.size() < kSllHeader) return LinkResult::malformed;
+      std::uint16_t protocol = be16(frame, 14);
+      pos = kSllHeader;
+      result = skip_vlan_tags(frame, protocol, pos);
+      break;
+    }
+    case DLT_LINUX_SLL2: {
+      if (frame.size() < kSll2Header) return LinkResult::malformed;
+      std::uint16_t protocol = be16(frame, 0);
+      pos = kSll2Header;
+      result = skip_vlan_tags(frame, protocol, pos);
+      break;
+    }
+    case DLT_NULL:
+    case DLT_LOOP: {
+      // DLT_NULL stores the address family in the capturing host's byte order, DLT_LOOP in
+      // network order; AF_INET is 2 everywhere, so accept either order.
+      if (frame.size() < kNullHeader) return LinkResult::malformed;
+      const bool inet = le32(frame, 0) == kAfInet || be32(frame, 0) == kAfInet;
+      pos = kNullHeader;
+      result = inet ? LinkResult::ipv4 : LinkResult::other;
+      break;
+    }
+    case DLT_RAW:
+    case DLT_IPV4: {
+      if (frame.empty()) return LinkResult::malformed;
+      // DLT_RAW may also carry IPv6: the version nibble tells.
+      result =
+          (std::to_integer<unsigned>(frame[0]) >> 4) == 4 ? LinkResult::ipv4 : LinkResult::other;
+      break;
+    }
+    default:
+      return LinkResult::other;
+  }
+  if (result == LinkResult::ipv4) ipv4 = frame.subspan(pos);
+  return result;
+}
+
+// Record time in ns; false if it does not fit an int64 (possible in a corrupt pcapng).
+bool record_time_ns(const pcap_pkthdr& header, std::int64_t& out) {
+  std::int64_t seconds_ns = 0;
+  if (__builtin_mul_overflow(static_cast<std::int64_t>(header.ts.tv_sec), kNsPerSecond,
+                             &seconds_ns)) {
+    return false;
+  }
+  // The reader is opened with nanosecond precision, so tv_usec holds nanoseconds.
+  return !__builtin_add_overflow(seconds_ns, static_cast<std::int64_t>(header.ts.tv_usec), &out);
+}
+
+struct PcapCloser {
+  void operator()(pcap_t* p) const { pcap_close(p); }
+};
+using PcapHandle = std::unique_ptr<pcap_t, PcapCloser>;
+
+struct DumperCloser {
+  void operator()(pcap_dumper_t* d) const { pcap_dump_close(d); }
+};
+using DumperHandle = std::unique_ptr<pcap_dumper_t, DumperCloser>;
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------------
+// Reader
+
+struct PcapReader::Impl {
+  std::string source;          // path or memory name, for messages
+  std::filesystem::path path;  // empty when reading from memory
+  std::vector<std::byte> memory;
+  bool in_memory = false;
+
+  PcapHandle pcap;
+  int dlt = DLT_EN10MB;
+  bool pcapng = false;
+  std::vector<std::uint16_t> ports;  // sorted; empty = all
+  Ipv4Reassembler reassembler;
+  std::uint64_t incomplete_seen = 0;  // reassembler.stats().incomplete() already in `stats`
+  PcapStats stats;
+  std::string end_error;
+  bool finished = false;
+  std::uint64_t next_record_index = 0;
+  bool have_record_time = false;  // min/max_record_time_ns are set
+
+  void open();
+  void sync_incomplete();
+  void finish();
+  std::optional<UdpDatagram> decode(std::span<const std::byte> frame, bool frame_complete,
+                                    std::int64_t time_ns, std::uint64_t record_index);
+};
+
+void PcapReader::Impl::open() {
+  FILE* file = nullptr;
+  if (in_memory) {
+    if (memory.empty()) throw FormatError(source, 0, "empty input, not a pcap/pcapng capture");
+    // fmemopen never writes through a read-only stream; the buffer is owned by this Impl.
+    file = fmemopen(memory.data(), memory.size(), "rb");
+  } else {
+    file = std::fopen(path.c_str(), "rb");
+  }
+  if (file == nullptr) {
+    throw Error(source + ": cannot open: " + std::strerror(errno));
+  }
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  pcap_t* p = pcap_fopen_offline_with_tstamp_precision(file, PCAP_TSTAMP_PRECISION_NANO, errbuf);
+  if (p == nullptr) {
+    // On failure libpcap leaves the FILE to us; its position is where header parsing stopped.
+    const long position = std::ftell(file);
+    std::fclose(file);
+    const std::string message = errbuf;
+    const bool bad_magic = message.find("unknown file format") != std::string::npos;
+    throw FormatError(source, bad_magic || position < 0 ? 0 : static_cast<std::uint64_t>(position),
+                      "not a readable pcap/pcapng capture: " + message);
+  }
+  pcap.reset(p);
+  dlt = pcap_datalink(p);
+  // libpcap reports the pcapng section header version (1.0) as the file version; classic pcap is
+  // 2.4.
+  pcapng = pcap_major_version(p) == 1;
+  finished = false;
+  next_record_index = 0;
+}
+
+void PcapReader::Impl::sync_incomplete() {
+  const std::uint64_t now = reassembler.stats().incomplete();
+  stats.incomplete_fragments += now - incomplete_seen;
+  incomplete_seen = now;
+}
+
+void PcapReader::Impl::finish() {
+  reassembler.flush();
+  sync_incomplete();
+  finished = true;
+}
+
+std::optional<UdpDatagram> PcapReader::Impl::decode(std::span<const std::byte> frame,
+                                                    bool frame_complete, std::int64_t time_ns,
+                                                    std::uint64_t record_index) {
+  std::span<const std::byte> ip;
+  switch (locate_ipv4(dlt, frame, ip)) {
+    case LinkResult::other:
+      ++stats.non_udp;
+      return std::nullopt;
+    case LinkResult::malformed:
+      ++stats.malformed;
+      return std::nullopt;
+    case LinkResult::ipv4:
+      break;
+  }
+
+  if (ip.size() < kIpv4MinHeader || (std::to_integer<unsigned>(ip[0]) >> 4) != 4) {
+    ++stats.malformed;
+    return std::nullopt;
+  }
+  const std::size_t header_bytes = (std::to_integer<std::size_t>(ip[0]) & 0x0F) * 4;
+  std::size_t total_length = be16(ip, 2);
+  const std::uint16_t flags_offset = be16(ip, 6);
+  const bool is_fragment = (flags_offset & (kIpMoreFragments | kIpOffsetMask)) != 0;
+  // total_length < ip.size() is normal: Ethernet pads short frames.
+  if (header_bytes < kIpv4MinHeader || total_length < header_bytes || header_bytes > ip.size()) {
+    ++stats.malformed;
+    return std::nullopt;
+  }
+  if (total_length > ip.size()) {
+    // Some sensors send a wrong total length (VLP-16 position packets say 1234 for a 540-byte
+    // packet). When the record holds the whole frame and this is not a fragment, the frame end
+    // bounds the packet and the UDP length still has to fit; otherwise the data is missing.
+    if (!frame_complete || is_fragment) {
+      ++stats.malformed;
+      return std::nullopt;
+    }
+    ++stats.ip_length_clamped;
+    total_length = ip.size();
+  }
+  const std::uint8_t protocol = std::to_integer<std::uint8_t>(ip[9]);
+  const std::uint32_t src_ip = be32(ip, 12);
+  const std::uint32_t dst_ip = be32(ip, 16);
+  const auto ip_payload = ip.subspan(header_bytes, total_length - header_bytes);
+  const bool more_fragments = (flags_offset & kIpMoreFragments) != 0;
+  const std::uint32_t fragment_offset =
+      static_cast<std::uint32_t>(flags_offset & kIpOffsetMask) * 8U;
+
+  std::span<const std::byte> udp;
+  if (is_fragment) {
+    ++stats.fragments;
+    if (protocol != kIpProtoUdp) {
+      ++stats.non_udp;
+      return std::nullopt;
+    }
+    const Ipv4Fragment fragment{
+        {src_ip, dst_ip, be16(ip, 4), protocol}, fragment_offset, more_fragments, ip_payload};
+    const auto result = reassembler.add(fragment, time_ns);
+    sync_incomplete();
+    switch (result.status) {
+      case Ipv4Reassembler::Status::pending:
+      case Ipv4Reassembler::Status::duplicate:
+        return std::nullopt;
+      case Ipv4Reassembler::Status::invalid:
+      case Ipv4Reassembler::Status::conflict:
+        ++stats.malformed;
+        return std::nullopt;
+      case Ipv4Reassembler::Status::complete:
+        ++stats.reassembled;
+        udp = result.datagram;
+        break;
+    }
+  } else if (protocol != kIpProtoUdp) {
+    ++stats.non_udp;
+    return std::nullopt;
+  } else {
+    udp = ip_payload;
+  }
+
+  if (udp.size() < kUdpHeader) {
+    ++stats.malformed;
+    return std::nullopt;
+  }
+  const std::size_t udp_length = be16(udp, 4);
+  if (udp_length < kUdpHeader || udp_length > udp.size()) {
+    ++stats.malformed;
+    return std::nullopt;
+  }
+  UdpDatagram datagram;
+  datagram.capture_time_ns = time_ns;
+  datagram.src_ip = src_ip;
+  datagram.dst_ip = dst_ip;
+  datagram.src_port = be16(udp, 0);
+  datagram.dst_port = be16(udp, 2);
+  datagram.record_index = record_index;
+  datagram.payload = udp.subspan(kUdpHeader, udp_length - kUdpHeader);
+  if (!ports.empty() && !std::binary_search(ports.begin(), ports.end(), datagram.dst_port)) {
+    ++stats.filtered;
+    return std::nullopt;
+  }
+  ++stats.udp_datagrams;
+  return datagram;
+}
+
+PcapReader::PcapReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {
+  impl_->open();
+}
+
+PcapReader::PcapReader(const std::filesystem::path& path) : impl_(std::make_unique<Impl>()) {
+  impl_->source = path.string();
+  impl_->path = path;
+  impl_->open();
+}
+
+PcapReader PcapReader::from_memory(std::span<const std::byte> bytes, std::string name) {
+  auto impl = std::make_unique<Impl>();
+  impl->source = std::move(name);
+  impl->memory.assign(bytes.begin(), bytes.end());
+  impl->in_memory = true;
+  return PcapReader(std::move(impl));
+}
+
+PcapReader::~PcapReader() = default;
+PcapReader::PcapReader(PcapReader&&) noexcept = default;
+PcapReader& PcapReader::operator=(PcapReader&&) noexcept = default;
+
+void PcapReader::set_port_filter(std::vector<std::uint16_t> ports) {
+  std::sort(ports.begin(), ports.end());
+  ports.erase(std::unique(ports.begin(), ports.end()), ports.end());
+  impl_->ports = std::move(ports);
+}
+
+std::optional<UdpDatagram> PcapReader::next() {
+  Impl& s = *impl_;
+  while (!s.finished) {
+    pcap_pkthdr* header = nullptr;
+    const u_char* data = nullptr;
+    const int rc = pcap_next_ex(s.pcap.get(), &header, &data);
+    if (rc == PCAP_ERROR_BREAK) {  // clean end of file
+      s.finish();
+      break;
+    }
+    if (rc != 1) {
+      // A truncated or corrupt record: libpcap cannot resynchronise, so the file ends here.
+      ++s.stats.malformed;
+      const long position = std::ftell(pcap_file(s.pcap.get()));
+      s.end_error = "at byte offset " + std::to_string(position < 0 ? 0 : position) + ": " +
+                    pcap_geterr(s.pcap.get());
+      s.finish();
+      break;
+    }
+    const std::uint64_t index = s.next_record_index++;
+    std::int64_t time_ns = 0;
+    if (!record_time_ns(*header, time_ns)) {
+      ++s.stats.records;
+      ++s.stats.malformed;
+      continue;
+    }
+    if (!s.have_record_time) {
+      s.have_record_time = true;
+      s.stats.min_record_time_ns = time_ns;
+      s.stats.max_record_time_ns = time_ns;
+    } else {
+      s.stats.min_record_time_ns = std::min(s.stats.min_record_time_ns, time_ns);
+      s.stats.max_record_time_ns = std::max(s.stats.max_record_time_ns, time_ns);
+    }
+    ++s.stats.records;
+    const std::span<const std::byte> frame(reinterpret_cast<const std::byte*>(data),
+                                           header->caplen);
+    const bool frame_complete = header->caplen >= header->len;
+    if (auto datagram = s.decode(frame, frame_complete, time_ns, index)) return datagram;
+  }
+  return std::nullopt;
+}
+
+void PcapReader::rewind() {
+  impl_->reassembler.flush();
+  impl_->sync_incomplete();
+  impl_->end_error.clear();
+  impl_->pcap.reset();
+  impl_->open();
+}
+
+const PcapStats& PcapReader::stats() const {
+  return impl_->stats;
+}
+
+void PcapReader::set_reassembly_limits(const Ipv4ReassemblyLimits& limits) {
+  impl_->reassembler.flush();
+  impl_->sync_incomplete();
+  impl_->reassembler = Ipv4Reassembler(limits);
+  impl_->incomplete_seen = 0;
+}
+
+const Ipv4ReassemblyStats& PcapReader::reassembly_stats() const {
+  return impl_->reassembler.stats();
+}
+
+int PcapReader::link_type() const {
+  return impl_->dlt;
+}
+
+std::string PcapReader::link_type_name() const {
+  const char* name = pcap_datalink_val_to_name(impl_->dlt);
+  return name != nullptr ? name : "DLT " + std::to_string(impl_->dlt);
+}
+
+bool PcapReader::is_pcapng() const {
+  return impl_->pcapng;
+}
+
+const std::string& PcapReader::end_error() const {
+  return impl_->end_error;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Writer
+
+struct PcapWriter::Impl {
+  std::string source;
+  Options options;
+  PcapHandle dead;
+  DumperHandle dumper;
+  std::uint16_t next_ip_id = 1;
+  std::vector<std::byte> ip_payload;  // UDP header + data, reused
+  std::vector<std::byte> frame;       // one Ethernet frame, reused
+};
+
+namespace {
+
+void mac_for_ip(std::byte* mac, std::uint32_t ip) {
+  if ((ip >> 28) == 0xE) {  // 224.0.0.0/4: RFC 1112 multicast MAC 01:00:5e + low 23 bits
+    const std::uint32_t low = ip & 0x7FFFFF;
+    const std::byte prefix[3] = {std::byte{0x01}, std::byte{0x00}, std::byte{0x5E}};
+    std::memcpy(mac, prefix, 3);
+    mac[3] = static_cast<std::byte>(low >> 16);
+    mac[4] = static_cast<std::byte>((low >> 8) & 0xFF);
+    mac[5] = static_cast<std::byte>(low & 0xFF);
+  } else if (ip == 0xFFFFFFFF) {
+    std::memset(mac, 0xFF, 6);
+  } else {  // locally administered unicast MAC derived from the address
+    mac[0] = std::byte{0x02};
+    mac[1] = std::byte{0x00};
+    put32(mac + 2, ip);
+  }
+}
+
+}  // namespace
+
+PcapWriter::PcapWriter(const std::filesystem::path& path, Options options)
+    : impl_(std::make_unique<Impl>()) {
+  if (options.mtu < kMinIpv4Mtu || options.mtu > kMaxIpv4Mtu) {
+    throw std::invalid_argument("PcapWriter: mtu " + std::to_string(options.mtu) +
+                                " outside [68, 65535]");
+  }
+  impl_->source = path.string();
+  impl_->options = options;
+  const unsigned precision =
+      options.nanosecond_resolution ? PCAP_TSTAMP_PRECISION_NANO : PCAP_TSTAMP_PRECISION_MICRO;
+  impl_->dead.reset(pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kWriterSnaplen, precision));
+  if (!impl_->dead) throw Error(impl_->source + ": pcap_open_dead failed");
+  pcap_dumper_t* dumper = pcap_dump_open(impl_->dead.get(), path.c_str());
+  if (dumper == nullptr) {
+    throw Error(impl_->source + ": cannot create pcap: " + pcap_geterr(impl_->dead.get()));
+  }
+  impl_->dumper.reset(dumper);
+}
+
+PcapWriter::~PcapWriter() = default;
+PcapWriter::PcapWriter(PcapWriter&&) noexcept = default;
+PcapWriter& PcapWriter::operator=(PcapWriter&&) noexcept = default;
+
+void PcapWriter::write_udp(std::int64_t capture_time_ns, std::uint32_t src_ip,
+                           std::uint16_t src_port, std::uint32_t dst_ip, std::uint16_t dst_port,
+                           std::span<const std::byte> payload) {
+  Impl& s = *impl_;
+  if (payload.size() > kMaxUdpPayload) {
+    throw std::invalid_argument("PcapWriter: UDP payload of " + std::to_string(payload.size()) +
+                                " bytes exceeds 65507");
+  }
+  const std::int64_t seconds = capture_time_ns / kNsPerSecond;
+  const std::int64_t sub_second_ns = capture_time_ns % kNsPerSecond;
+  if (capture_time_ns < 0 || seconds > std::numeric_limits<std::uint32_t>::max()) {
+    throw std::invalid_argument("PcapWriter: time " + std::to_string(capture_time_ns) +
+                                " ns does not fit a pcap record");
+  }
+
+  // UDP header + payload, checksummed over the RFC 768 pseudo-header.
+  const std::size_t udp_length = kUdpHeader + payload.size();
+  s.ip_payload.resize(udp_length);
+  std::byte* udp = s.ip_payload.data();
+  put16(udp, src_port);
+  put16(udp + 2, dst_port);
+  put16(udp + 4, static_cast<std::uint16_t>(udp_length));
+  put16(udp + 6, 0);
+  if (!payload.empty()) std::memcpy(udp + kUdpHeader, payload.data(), payload.size());
+  std::byte pseudo[12];
+  put32(pseudo, src_ip);
+  put32(pseudo + 4, dst_ip);
+  pseudo[8] = std::byte{0};
+  pseudo[9] = std::byte{kIpProtoUdp};
+  put16(pseudo + 10, static_cast<std::uint16_t>(udp_length));
+  std::uint16_t udp_checksum = checksum_finish(checksum_add(checksum_add(0, pseudo), s.ip_payload));
+  if (udp_checksum == 0) udp_checksum = 0xFFFF;  // 0 means "no checksum" in UDP over IPv4
+  put16(udp + 6, udp_checksum);
+
+  // Every fragment but the last carries a multiple of 8 bytes (the offset unit).
+  const std::size_t max_chunk = ((s.options.mtu - kIpv4MinHeader) / 8) * 8;
+  const std::uint16_t ip_id = s.next_ip_id++;
+  pcap_pkthdr record{};
+  record.ts.tv_sec = static_cast<time_t>(seconds);
+  record.ts.tv_usec = static_cast<suseconds_t>(
+      s.options.nanosecond_resolution ? sub_second_ns : sub_second_ns / 1000);
+
+  for (std::size_t offset = 0; offset < udp_length; offset += max_chunk) {
+    const std::size_t chunk = std::min(max_chunk, udp_length - offset);
+    const bool more = offset + chunk < udp_length;
+    const std::size_t ip_length = kIpv4MinHeader + chunk;
+    const std::size_t frame_length = std::max(kEthernetHeader + ip_length, kMinEthernetFrame);
+    s.frame.assign(frame_length, std::byte{0});
+    std::byte* eth = s.frame.data();
+    mac_for_ip(eth, dst_ip);
+    mac_for_ip(eth + 6, src_ip);
+    put16(eth + 12, kEthertypeIpv4);
+
+    std::byte* ip = eth + kEthernetHeader;
+    ip[0] = std::byte{0x45};  // version 4, 5 header words
+    ip[1] = std::byte{0};
+    put16(ip + 2, static_cast<std::uint16_t>(ip_length));
+    put16(ip + 4, ip_id);
+    put16(ip + 6, static_cast<std::uint16_t>((more ? kIpMoreFragments : 0) | (offset / 8)));
+    ip[8] = std::byte{64};  // TTL
+    ip[9] = std::byte{kIpProtoUdp};
+    put32(ip + 12, src_ip);
+    put32(ip + 16, dst_ip);
+    put16(ip + 10, checksum_finish(checksum_add(0, {ip, kIpv4MinHeader})));
+    std::memcpy(ip + kIpv4MinHeader, s.ip_payload.data() + offset, chunk);
+
+    record.caplen = static_cast<bpf_u_int32>(frame_length);
+    record.len = static_cast<bpf_u_int32>(frame_length);
+    pcap_dump(reinterpret_cast<u_char*>(s.dumper.get()), &record,
+              reinterpret_cast<const u_char*>(s.frame.data()));
+  }
+}
+
+void PcapWriter::flush() {
+  FILE* file = pcap_dump_file(impl_->dumper.get());
+  if (pcap_dump_flush(impl_->dumper.get()) != 0 || std::ferror(file) != 0) {
+    throw Error(impl_->source + ": writing the capture failed");
+  }
+}
+
+}  // namespace livod::io
