@@ -74,9 +74,11 @@ function(livod_glob_tests prefix dir)
   file(GLOB tests CONFIGURE_DEPENDS ${dir}/*_test.cpp)
   foreach(t ${tests})
     get_filename_component(stem ${t} NAME_WE)
+    # One label per test: gtest_discover_tests (CMake 3.25) splits a label list into separate
+    # property arguments, so "unit;threads" would lose "threads".
     set(labels unit)
     if(stem MATCHES "_threads_test$")
-      list(APPEND labels threads)
+      set(labels threads)
       set_property(GLOBAL APPEND PROPERTY LIVOD_THREADS_TESTS ${prefix}_${stem})
     endif()
     livod_add_test(${prefix}_${stem} SOURCES ${t} LIBS ${ARG_LIBS} LABELS ${labels})

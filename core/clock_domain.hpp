@@ -39,10 +39,11 @@
 // before there is one) is rejected and mapped from its receive stamp. (Smaller backward steps
 // are reordered packets, or the samples that follow a glitch.) reset_confirm_samples such
 // samples in a row mean the sensor clock really jumped (reboot, PPS re-zeroing, PTP step): the
-// estimator restarts and `resets` counts it. A clock that stepped back by less than a packet
-// interval shows up as samples arriving more than jump_threshold late for late_reset_after,
-// which also restarts it. A driver that knows of a reboot from the protocol (Ouster init_id,
-// Livox frame counter restart) calls reset().
+// estimator restarts and `resets` counts it. A backward step larger than jump_threshold but
+// smaller than the packet interval (sensor time still increases) shows up as samples arriving
+// more than jump_threshold late for late_reset_after, which also restarts it. Backward steps
+// smaller than jump_threshold are not detected (see docs/clocks.md). A driver that knows of a
+// reboot from the protocol (Ouster init_id, Livox frame counter restart) calls reset().
 //
 // Not thread-safe: the capture thread that calls observe() owns the object; it copies stats()
 // into its health counters. observe() and map() never allocate and are O(1) except when the

@@ -11,15 +11,18 @@
 //
 // Boundedness: the window is cut into `bins` sub-windows of window/bins sensor time each; every
 // sub-window keeps only its minimum-delay sample (the only kind of sample that can be on the lower
-// hull), so memory is `bins` points whatever the packet rate (120 s at 2 kHz is still `bins`
-// points). The "minimum" is taken after removing the current slope estimate, so a skewed clock
-// does not bias the choice towards the start or the end of a sub-window.
+// hull), so memory is `bins` + 1 points whatever the packet rate (120 s at 2 kHz is still
+// `bins` + 1 points). The "minimum" is taken after removing the current slope estimate, so a skewed
+// clock does not bias the choice towards the start or the end of a sub-window.
 //
 // Spikes: a sub-window minimum far below its neighbours (further than any allowed skew explains,
 // by more than `spike_tolerance`) cannot be a low-delay sample: it is a sensor stamp that was too
 // late (a glitch). It is left out of the hull, because a single such point would otherwise pull
 // the support line down for a whole window. The test compares each point with the second lowest
-// bound of its up to four neighbours (two each side), so two adjacent glitches are caught too.
+// bound of its up to four nearest neighbours (two each side), and is repeated over a few passes
+// on the survivors, so clusters of glitches in nearby sub-windows are caught too. Glitches
+// smaller than the tolerance cannot be told from delay noise and may bias the fit by up to
+// their size.
 //
 // Which support line: among all lines below every point with |slope| <= max_slope, the one that
 // minimises the summed vertical distance to the kept points. That linear programme's optimum is
