@@ -1,0 +1,15 @@
+#pragma once
+// The registry's factory for Ouster sensors (model "OS"): needs the sensor metadata JSON.
+
+#include <memory>
+
+#include "drivers/lidar_decoder.hpp"
+#include "drivers/registry.hpp"
+
+namespace livod::drivers::ouster {
+
+// Loads config.metadata and builds an OusterDecoder with default options. Throws livod::Error if
+// the metadata is missing, unreadable or invalid, or if a Velodyne calibration was given.
+[[nodiscard]] std::unique_ptr<LidarDecoder> make_ouster_decoder(const DecoderConfig& config);
+
+}  // namespace livod::drivers::ouster
