@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   livod::daemon::CommandContext ctx;
   livod::daemon::add_version_command(app, ctx);
   // COMMAND-REGISTRATIONS (one line per subcommand; keep sorted)
+  livod::daemon::add_decode_command(app, ctx);
   livod::daemon::add_inspect_command(app, ctx);
   livod::daemon::add_sim_command(app, ctx);
   livod::daemon::add_eval_command(app, ctx);

@@ -12,6 +12,8 @@ packages=(
   libv4l-dev libusb-1.0-0-dev libaravis-dev aravis-tools libpcap-dev can-utils iproute2
   # logging, config, CLI, JSON
   libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
+  # XML (Velodyne/VeloView calibration files)
+  libexpat1-dev
   # LCM (C++ and the Java pieces lcm-spy needs)
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
   # systemd integration
