@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include "core/error.hpp"
+#include "drivers/livox/livox_factory.hpp"
 #include "drivers/ouster/ouster_factory.hpp"
 #include "drivers/velodyne/velodyne_decoder.hpp"
 
@@ -52,6 +53,13 @@ std::span<const DecoderEntry> decoder_entries() {
                    &make_velodyne_model<Model::kVls128>},
       DecoderEntry{"OS", "ouster", "Ouster OS0/OS1/OS2, any profile (needs --metadata)",
                    &ouster::make_ouster_decoder},
+      DecoderEntry{"AVIA", "livox", "Livox Avia (SDK1)", &livox::make_livox_decoder},
+      DecoderEntry{"HORIZON", "livox", "Livox Horizon (SDK1)", &livox::make_livox_decoder},
+      DecoderEntry{"TELE-15", "livox", "Livox Tele-15 (SDK1)", &livox::make_livox_decoder},
+      DecoderEntry{"MID-40", "livox", "Livox Mid-40 (SDK1)", &livox::make_livox_decoder},
+      DecoderEntry{"MID-70", "livox", "Livox Mid-70 (SDK1)", &livox::make_livox_decoder},
+      DecoderEntry{"MID-360", "livox", "Livox Mid-360 (SDK2)", &livox::make_livox_decoder},
+      DecoderEntry{"HAP", "livox", "Livox HAP (SDK2)", &livox::make_livox_decoder},
       // Other families: one row per model.
   };
   return kEntries;
