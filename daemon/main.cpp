@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   livod::daemon::add_decode_command(app, ctx);
   livod::daemon::add_inspect_command(app, ctx);
   livod::daemon::add_sim_command(app, ctx);
+  livod::daemon::add_check_config_command(app, ctx);
   livod::daemon::add_eval_command(app, ctx);
 
   app.parse_complete_callback([&log_config] {

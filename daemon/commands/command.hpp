@@ -18,6 +18,7 @@ void add_version_command(CLI::App& app, CommandContext& ctx);
 void add_decode_command(CLI::App& app, CommandContext& ctx);
 void add_inspect_command(CLI::App& app, CommandContext& ctx);
 void add_sim_command(CLI::App& app, CommandContext& ctx);
+void add_check_config_command(CLI::App& app, CommandContext& ctx);
 void add_eval_command(CLI::App& app, CommandContext& ctx);
 
 }  // namespace livod::daemon

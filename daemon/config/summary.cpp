@@ -1,0 +1,105 @@
+#include "daemon/config/summary.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "daemon/config/rotation.hpp"
+
+namespace livod::daemon {
+
+namespace {
+
+std::string describe_source(const SensorConfig& s) {
+  std::ostringstream out;
+  if (const auto* udp = std::get_if<UdpSourceConfig>(&s.source)) {
+    out << "udp " << udp->bind_address;
+    const UdpPorts& p = udp->ports;
+    const std::pair<const char*, std::uint16_t> ports[] = {{"lidar", p.lidar},
+                                                           {"imu", p.imu},
+                                                           {"position", p.position},
+                                                           {"command", p.command},
+                                                           {"push", p.push}};
+    for (const auto& [name, port] : ports) {
+      if (port != 0) out << ' ' << name << ':' << port;
+    }
+    if (!udp->sensor_address.empty()) out << " from " << udp->sensor_address;
+    if (!udp->multicast_group.empty()) out << " group " << udp->multicast_group;
+  } else if (const auto* replay = std::get_if<ReplaySourceConfig>(&s.source)) {
+    out << "replay " << enum_name(replay->format) << ' ' << replay->file.string();
+    if (!replay->topic.empty()) out << " topic " << replay->topic;
+  } else if (const auto* device = std::get_if<DeviceSourceConfig>(&s.source)) {
+    out << "device ";
+    if (!device->path.empty()) out << device->path;
+    if (!device->interface.empty()) out << device->interface;
+    if (s.driver == Driver::aravis) {
+      out << (device->camera_id.empty() ? "first camera found" : device->camera_id);
+    }
+  }
+  return out.str();
+}
+
+std::string describe_pose(const Eigen::Isometry3d& T) {
+  // Values that print as zero are printed as zero, not as "-0.000".
+  const auto tidy = [](Eigen::Vector3d v, double resolution) {
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(v[i]) < resolution) v[i] = 0.0;
+    }
+    return v;
+  };
+  const Eigen::Vector3d t = tidy(T.translation(), 5e-4);
+  const Eigen::Vector3d rpy = tidy(rpy_deg_from_rotation(T.linear()), 5e-3);
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << "t [" << t.x() << ", " << t.y() << ", " << t.z()
+      << "] m, rpy [" << std::setprecision(2) << rpy.x() << ", " << rpy.y() << ", " << rpy.z()
+      << "] deg";
+  return out.str();
+}
+
+std::string file_or_none(const std::filesystem::path& p) {
+  return p.empty() ? std::string("none") : p.string();
+}
+
+}  // namespace
+
+std::string summarize_config(const LivodConfig& config) {
+  std::ostringstream out;
+  out << "body frame: " << config.body_frame << '\n';
+  std::size_t enabled = 0;
+  for (const auto& s : config.sensors) enabled += s.enabled ? 1 : 0;
+  out << "sensors: " << config.sensors.size() << " (" << enabled << " enabled)\n";
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const SensorConfig& s = config.sensors[i];
+    out << "  " << s.name << ": " << enum_name(s.driver);
+    if (!s.model.empty()) out << ' ' << s.model;
+    if (!s.enabled) out << " (disabled)";
+    out << ", " << describe_source(s);
+    if (s.imu.enabled) out << ", internal IMU";
+    if (sensor_kind(s.driver) == SensorKind::camera) {
+      out << ", " << enum_name(s.camera.model) << ' ' << s.camera.width << 'x' << s.camera.height;
+      if (s.camera.scale != 1.0) out << " x" << s.camera.scale;
+    }
+    if (config.body_sensor_index == static_cast<int>(i) && !config.body_is_internal_imu) {
+      out << ", body frame";
+    } else {
+      out << ", T_body_sensor " << describe_pose(s.T_body_sensor);
+    }
+    if (s.time_offset_s != 0.0) out << ", time offset " << s.time_offset_s << " s";
+    out << '\n';
+  }
+  const auto& lcm = config.outputs.lcm;
+  out << "outputs: lcm ";
+  if (lcm.enabled) {
+    out << lcm.url;
+    if (!lcm.channel_suffix.empty()) out << " (channel suffix " << lcm.channel_suffix << ')';
+    out << (lcm.publish_imu_rate ? ", IMU-rate pose" : "") << (lcm.publish_cloud ? ", cloud" : "");
+  } else {
+    out << "off";
+  }
+  out << "; trajectory " << file_or_none(config.outputs.trajectory) << "; map "
+      << file_or_none(config.outputs.map_pcd) << "; timing "
+      << file_or_none(config.outputs.timing_report) << '\n';
+  return out.str();
+}
+
+}  // namespace livod::daemon

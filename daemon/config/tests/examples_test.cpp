@@ -1,0 +1,80 @@
+// Every example configuration shipped in the repository loads without errors. The only
+// acceptable warnings are replay recordings that are not part of the repository.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <vector>
+
+#include "daemon/config/load_config.hpp"
+#include "daemon/config/tests/config_test_support.hpp"
+
+namespace livod::daemon {
+namespace {
+
+// The repository root, found from this source file's path (daemon/config/tests/...).
+std::filesystem::path repository_root() {
+  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().parent_path();
+}
+
+std::vector<std::filesystem::path> example_configs() {
+  std::vector<std::filesystem::path> files;
+  const auto root = repository_root();
+  for (const auto& folder : {root / "systemd", root / "docs" / "examples"}) {
+    if (!std::filesystem::is_directory(folder)) continue;
+    for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+      const auto ext = entry.path().extension();
+      if (entry.is_regular_file() && (ext == ".yaml" || ext == ".yml")) {
+        files.push_back(entry.path());
+      }
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+TEST(ConfigExamples, RepositoryHasExamples) {
+  const auto files = example_configs();
+  EXPECT_TRUE(std::filesystem::exists(repository_root() / "systemd" / "livod.example.yaml"))
+      << repository_root();
+  EXPECT_GE(files.size(), 5u);
+}
+
+TEST(ConfigExamples, EveryExampleLoadsWithoutErrors) {
+  for (const auto& file : example_configs()) {
+    SCOPED_TRACE(file.string());
+    const auto result = load_config(file);
+    EXPECT_EQ(result.error_count(), 0u) << test::dump(result);
+    for (const auto& p : result.problems) {
+      const bool missing_recording = p.kind == ProblemKind::missing_file &&
+                                     p.path.find(".source.replay.file") != std::string::npos;
+      EXPECT_TRUE(missing_recording) << format_problem(result.source, p);
+    }
+    EXPECT_FALSE(result.config.sensors.empty());
+    EXPECT_GE(result.config.body_sensor_index, 0);
+  }
+}
+
+// The systemd example is the reference robot config: it must be completely clean.
+TEST(ConfigExamples, SystemdExampleIsClean) {
+  const auto result = load_config(repository_root() / "systemd" / "livod.example.yaml");
+  EXPECT_TRUE(result.problems.empty()) << test::dump(result);
+  EXPECT_EQ(result.config.body_frame, "avia.imu");
+  EXPECT_TRUE(result.config.body_is_internal_imu);
+}
+
+// The Ouster replay example points at the real capture of the shared data beside the repository.
+TEST(ConfigExamples, OusterReplayExampleFindsTheSharedCapture) {
+  const auto result =
+      load_config(repository_root() / "docs" / "examples" / "ouster-os1-128-replay.yaml");
+  ASSERT_TRUE(result.ok()) << test::dump(result);
+  const auto& os1 = result.config.sensors.at(0);
+  EXPECT_TRUE(std::filesystem::exists(os1.metadata)) << os1.metadata;
+  // inverse of the metadata's imu_to_sensor_transform (mm -> m)
+  EXPECT_TRUE(os1.T_body_sensor.translation().isApprox(
+      Eigen::Vector3d(-0.006253, 0.011775, -0.007645), 1e-12));
+}
+
+}  // namespace
+}  // namespace livod::daemon
