@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "tools/sim/livox_sim.hpp"
+#include "tools/sim/ouster_sim.hpp"
 #include "tools/sim/velodyne_sim.hpp"
 
 namespace livod::sim {
@@ -21,6 +22,10 @@ std::vector<Entry> entries() {
       {"AVIA", "Livox Avia (SDK1), 6-line rosette, 240 kpts/s, internal IMU", make_sim_avia},
       {"MID-360", "Livox Mid-360 (SDK2), 360 deg, 4 lines, 200 kpts/s, internal IMU",
        make_sim_mid360},
+      {"OS1-64", "Ouster OS1-64, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU",
+       make_sim_os1_64},
+      {"OS1-128", "Ouster OS1-128, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU",
+       make_sim_os1_128},
       {"VLP-16", "Velodyne VLP-16, 600 RPM, data + position packets", make_sim_vlp16},
       // SIM-LIDAR-REGISTRY: one line per simulated model
   };
