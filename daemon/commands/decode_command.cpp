@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "daemon/commands/command.hpp"
+#include "daemon/config/load_config.hpp"
+#include "daemon/config/problems.hpp"
 #include "drivers/registry.hpp"
 #include "drivers/scan_writer.hpp"
 #include "drivers/velodyne/velodyne_decoder.hpp"
@@ -38,7 +40,28 @@ struct DecodeArgs {
   std::vector<std::uint16_t> ports;
   std::string output;
   bool pcd_ascii = false;
+  std::string config;  // optional livod configuration: supplies calibration / metadata files
 };
+
+// Takes the calibration/metadata of the configured LiDAR with the same model (explicit options
+// win). Returns false after printing every problem when the configuration has errors.
+bool apply_config(const std::string& path, const std::string& model, drivers::DecoderConfig& out) {
+  const ConfigResult result = load_config(path);
+  for (const auto& problem : result.problems) {
+    fmt::print(stderr, "{}\n", format_problem(result.source, problem));
+  }
+  if (result.error_count() > 0) return false;
+  const drivers::DecoderEntry* wanted = drivers::find_decoder(model);
+  for (const auto& sensor : result.config.sensors) {
+    if (!sensor.enabled || drivers::find_decoder(sensor.model) != wanted) continue;
+    if (!out.calibration && !sensor.calibration.empty()) out.calibration = sensor.calibration;
+    if (!out.metadata && !sensor.metadata.empty()) out.metadata = sensor.metadata;
+    return true;
+  }
+  fmt::print(stderr, "livod decode: {} configures no enabled {} sensor; decoding with defaults\n",
+             path, model);
+  return true;
+}
 
 void print_family_details(const drivers::LidarDecoder& decoder) {
   if (const auto* v = dynamic_cast<const drivers::velodyne::VelodyneDecoder*>(&decoder)) {
@@ -62,6 +85,9 @@ int run_decode(const DecodeArgs& args) {
     fmt::print(stderr, "livod decode: unknown model '{}'; known models: {}\n", args.model,
                drivers::known_models());
     return kExitUsage;
+  }
+  if (!args.config.empty() && !apply_config(args.config, args.model, config)) {
+    return kExitFailure;
   }
   const auto format = drivers::scan_format_for(args.output, args.pcd_ascii);
   if (!format) {
@@ -134,6 +160,10 @@ void add_decode_command(CLI::App& app, CommandContext& ctx) {
                   "ports)");
   cmd->add_option("-o,--output", args->output, "Output file: .csv or .pcd")->required();
   cmd->add_flag("--pcd-ascii", args->pcd_ascii, "Write the PCD as ASCII instead of binary");
+  cmd->add_option("--config", args->config,
+                  "livod configuration: the calibration/metadata files of its sensor with this "
+                  "model are used (explicit --calibration/--metadata win)")
+      ->check(CLI::ExistingFile);
   cmd->callback([&ctx, args] { ctx.exit_code = run_decode(*args); });
 }
 

@@ -33,6 +33,7 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
     double duration = 0.0;
     std::string out;
     bool no_images = false;
+    bool bag = false;
   };
   auto opts = std::make_shared<Options>();
   cmd->add_flag("--list", opts->list, "List the named scenarios (name first, one per line)");
@@ -44,6 +45,9 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
   cmd->add_option("--duration", opts->duration, "Seconds to simulate (default: the scenario's)");
   cmd->add_option("-o,--output", opts->out, "Output folder");
   cmd->add_flag("--no-images", opts->no_images, "Write camera csv/yaml but no PNG files");
+  cmd->add_flag("--bag", opts->bag,
+                "Also write sequence.bag: the same sequence as a ROS1 bag (FAST-LIO/FAST-LIVO2 "
+                "topics, synchronised stamps)");
   cmd->callback([opts, &ctx] {
     std::set<std::string> models;
     for (const auto& [m, _] : sim::simulated_lidar_models()) models.insert(m);
@@ -74,6 +78,10 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
     run.seed = opts->seed;
     if (opts->duration > 0.0) run.duration_s = opts->duration;
     run.write_images = !opts->no_images;
+    run.write_bag = opts->bag;
+    if (opts->bag && opts->no_images && !scenario.cameras.empty()) {
+      fmt::print(stderr, "livod sim: --no-images: the bag will have no camera images\n");
+    }
     const auto report = sim::run_scenario(scenario, run);
     fmt::print("scenario {}: {:.1f} s simulated in {:.1f} s ({:.2f}x real time)\n", scenario.name,
                report.simulated_s, report.wall_s, report.simulated_s / report.wall_s);

@@ -46,14 +46,24 @@ void CameraSim::render(const World& world, const Eigen::Isometry3d& T_world_cam,
   out.height = h;
   out.pixels.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
   std::normal_distribution<double> noise(0.0, params_.noise_sigma);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      double v = ideal_intensity(world, T_world_cam, exposure_s, x, y);
-      if (params_.noise_sigma > 0.0) v += noise(rng);
-      out.pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
-                 static_cast<std::size_t>(x)] =
-          static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+  // ideal_intensity() per pixel, with the per-frame work hoisted and the texture's lattice cells
+  // cached between neighbouring pixels: the same values, faster.
+  const double gain = params_.full_scale * exposure_s / params_.reference_exposure_s;
+  const Eigen::Matrix3d R_world_cam = T_world_cam.linear();
+  const Eigen::Vector3d origin = T_world_cam.translation();
+  AlbedoCache cache;
+  Hit hit;
+  for (std::size_t i = 0; i < out.pixels.size(); ++i) {
+    const Eigen::Vector3d& ray_cam = rays_cam_[i];
+    double v = 0.0;
+    if (ray_cam.squaredNorm() != 0.0) {
+      const Eigen::Vector3d dir = R_world_cam * ray_cam;
+      v = world.intersect(origin, dir, 1e-3, params_.max_range_m, hit)
+              ? gain * World::albedo(*hit.surface, hit.point, cache)
+              : gain * params_.sky_albedo;
     }
+    if (params_.noise_sigma > 0.0) v += noise(rng);
+    out.pixels[i] = static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
   }
 }
 

@@ -1,12 +1,13 @@
 #pragma once
 // Runs a scenario and writes its outputs to a folder:
-//   <lidar name>.pcap (+ side files such as Ouster metadata JSON)  wire-format captures
-//   can_imu.log                                                   candump log (if the scenario has
-//   one) mav0/<camera>/data.csv, data/<ns>.png, sensor.yaml            EuRoC/ASL layout, exposure
-//   per frame groundtruth.txt                                               TUM, body (IMU) frame,
-//   host clock config.yaml                                                   a livod configuration
-//   replaying it scenario.txt                                                  what was simulated
-//   (human-readable)
+//   <lidar>.pcap     wire-format capture (+ side files such as Ouster metadata JSON)
+//   can_imu.log      candump log of the CAN IMU (if the scenario has one)
+//   mav0/<camera>/   EuRoC/ASL: data.csv (with an exposure column), data/<ns>.png, sensor.yaml
+//   groundtruth.txt  TUM, body (IMU) frame, host clock
+//   config.yaml      a livod configuration replaying the folder
+//   scenario.txt     what was simulated (human-readable)
+//   sequence.bag     with write_bag: the same sequence as a ROS1 bag (tools/sim/bag_output.hpp)
+// Host clock stamps are host_epoch (rounded to whole ns) + scenario time, exact to the ns.
 
 #include <cstdint>
 #include <filesystem>
@@ -24,13 +25,14 @@ struct SimRunOptions {
   std::optional<double> duration_s;       // overrides the scenario's duration
   double host_epoch_s = 1'700'000'000.0;  // host clock (UTC) at scenario time 0
   bool write_images = true;
-  double chunk_s = 0.5;  // simulation step for memory-bounded generation
+  bool write_bag = false;  // also sequence.bag: the folder as a ROS1 bag (tools/sim/bag_output.hpp)
+  double chunk_s = 0.5;    // simulation step for memory-bounded generation
 };
 
 struct SimSensorReport {
   std::string name;
-  std::string kind;            // "lidar", "camera", "can_imu"
-  std::uint64_t messages = 0;  // datagrams, frames or CAN frames written
+  std::string kind;            // "lidar", "camera", "can_imu", "bag"
+  std::uint64_t messages = 0;  // datagrams, frames, CAN frames or bag messages written
   std::uint64_t dropped = 0;   // lost on the simulated link
   std::filesystem::path file;
 };
@@ -43,5 +45,10 @@ struct SimRunReport {
 };
 
 SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options);
+
+// The seed of one random stream of a run: derived from the run seed and the stream's name (a
+// LiDAR's or camera's name; "<name>/clock", "<name>/link", "<name>/noise" for the CAN IMU), so
+// that tests can rebuild exactly what the runner simulated.
+std::uint64_t sensor_seed(std::uint64_t run_seed, const std::string& stream);
 
 }  // namespace livod::sim

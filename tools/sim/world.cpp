@@ -1,6 +1,9 @@
 #include "tools/sim/world.hpp"
 
 #include <algorithm>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <cmath>
 #include <limits>
 
@@ -8,7 +11,6 @@ namespace livod::sim {
 namespace {
 
 constexpr double kEps = 1e-9;
-constexpr std::uint32_t kLeafSize = 4;
 
 // Integer lattice hash -> [0, 1). A small avalanche mix (murmur-style finaliser), deterministic
 // on every platform.
@@ -25,12 +27,102 @@ double lattice_value(std::int64_t x, std::int64_t y, std::int64_t z, std::uint32
   return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0);
 }
 
+// The slab test of Aabb::intersects() without branches, for the hot traversal loop: the same
+// comparisons as there (a NaN from 0 * inf compares false and leaves the interval unchanged),
+// written as selections the compiler turns into min/max instructions, and the empty-interval
+// check once at the end (t_min only grows and t_max only shrinks, so that is equivalent).
+inline bool slab_entry(const Aabb& box, const Eigen::Vector3d& origin,
+                       const Eigen::Vector3d& inv_dir, double t_min, double t_max,
+                       double& t_entry) {
+  for (int i = 0; i < 3; ++i) {
+    const double t0 = (box.min[i] - origin[i]) * inv_dir[i];
+    const double t1 = (box.max[i] - origin[i]) * inv_dir[i];
+    const double near = t0 > t1 ? t1 : t0;
+    const double far = t0 > t1 ? t0 : t1;
+    t_min = near > t_min ? near : t_min;
+    t_max = far < t_max ? far : t_max;
+  }
+  t_entry = t_min;
+  return !(t_min > t_max);
+}
+
+// slab_entry() for both children of an inner node at once: bit 0 set when the ray meets the left
+// box, bit 1 the right one, their entry distances in `entry`. With SSE2 the two lanes run
+// together; minpd/maxpd select exactly as the ternaries of slab_entry() do (the second operand
+// when a NaN is involved), so the results are bit for bit the same.
+inline int slab_entry_pair(const double (&child_min)[3][2], const double (&child_max)[3][2],
+                           const Eigen::Vector3d& origin, const Eigen::Vector3d& inv_dir,
+                           double t_min, double t_max, double (&entry)[2]) {
+#if defined(__SSE2__)
+  __m128d lo = _mm_set1_pd(t_min);
+  __m128d hi = _mm_set1_pd(t_max);
+  for (int i = 0; i < 3; ++i) {
+    const __m128d o = _mm_set1_pd(origin[i]);
+    const __m128d inv = _mm_set1_pd(inv_dir[i]);
+    const __m128d t0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(child_min[i]), o), inv);
+    const __m128d t1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(child_max[i]), o), inv);
+    const __m128d near = _mm_min_pd(t1, t0);  // t0 > t1 ? t1 : t0
+    const __m128d far = _mm_max_pd(t0, t1);   // t0 > t1 ? t0 : t1
+    lo = _mm_max_pd(near, lo);                // near > t_min ? near : t_min
+    hi = _mm_min_pd(far, hi);                 // far < t_max ? far : t_max
+  }
+  _mm_storeu_pd(entry, lo);
+  return _mm_movemask_pd(_mm_cmpngt_pd(lo, hi));  // !(t_min > t_max) per lane
+#else
+  int mask = 0;
+  for (int lane = 0; lane < 2; ++lane) {
+    double lo = t_min;
+    double hi = t_max;
+    for (int i = 0; i < 3; ++i) {
+      const double t0 = (child_min[i][lane] - origin[i]) * inv_dir[i];
+      const double t1 = (child_max[i][lane] - origin[i]) * inv_dir[i];
+      const double near = t0 > t1 ? t1 : t0;
+      const double far = t0 > t1 ? t0 : t1;
+      lo = near > lo ? near : lo;
+      hi = far < hi ? far : hi;
+    }
+    entry[lane] = lo;
+    if (!(lo > hi)) mask |= 1 << lane;
+  }
+  return mask;
+#endif
+}
+
+constexpr int kSahDepth = 32;
+constexpr std::uint32_t kMedianLeafSize = 4;
+
+double surface_area(const Aabb& box) {
+  const Eigen::Vector3d e = (box.max - box.min).cwiseMax(0.0);
+  return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+}
+
 // Quintic fade: C2-continuous interpolation, so image gradients are smooth.
 double fade(double t) {
   return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
 }
 
-double value_noise(const Eigen::Vector3d& p, std::uint32_t seed) {
+// The 8 lattice values around a cell, index a*4 + b*2 + d for the corner offsets (a, b, d).
+void lattice_corners(std::int64_t ix, std::int64_t iy, std::int64_t iz, std::uint32_t seed,
+                     double (&c)[8]) {
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b)
+      for (int d = 0; d < 2; ++d)
+        c[a * 4 + b * 2 + d] = lattice_value(ix + a, iy + b, iz + d, seed);
+}
+
+// Trilinear blend of the corners with the faded cell coordinates.
+double blend(const double (&c)[8], double u, double v, double w) {
+  const double x00 = c[0] + u * (c[4] - c[0]);
+  const double x10 = c[2] + u * (c[6] - c[2]);
+  const double x01 = c[1] + u * (c[5] - c[1]);
+  const double x11 = c[3] + u * (c[7] - c[3]);
+  const double y0 = x00 + v * (x10 - x00);
+  const double y1 = x01 + v * (x11 - x01);
+  return y0 + w * (y1 - y0);
+}
+
+// Value noise at p; `cell` (optional) caches the corners of the last cell looked up.
+double value_noise(const Eigen::Vector3d& p, std::uint32_t seed, AlbedoCache::Cell* cell) {
   const double fx = std::floor(p.x());
   const double fy = std::floor(p.y());
   const double fz = std::floor(p.z());
@@ -40,17 +132,40 @@ double value_noise(const Eigen::Vector3d& p, std::uint32_t seed) {
   const double u = fade(p.x() - fx);
   const double v = fade(p.y() - fy);
   const double w = fade(p.z() - fz);
-  double c[2][2][2];
-  for (int a = 0; a < 2; ++a)
-    for (int b = 0; b < 2; ++b)
-      for (int d = 0; d < 2; ++d) c[a][b][d] = lattice_value(ix + a, iy + b, iz + d, seed);
-  const double x00 = c[0][0][0] + u * (c[1][0][0] - c[0][0][0]);
-  const double x10 = c[0][1][0] + u * (c[1][1][0] - c[0][1][0]);
-  const double x01 = c[0][0][1] + u * (c[1][0][1] - c[0][0][1]);
-  const double x11 = c[0][1][1] + u * (c[1][1][1] - c[0][1][1]);
-  const double y0 = x00 + v * (x10 - x00);
-  const double y1 = x01 + v * (x11 - x01);
-  return y0 + w * (y1 - y0);
+  if (cell == nullptr) {
+    double c[8];
+    lattice_corners(ix, iy, iz, seed, c);
+    return blend(c, u, v, w);
+  }
+  if (!cell->valid || cell->x != ix || cell->y != iy || cell->z != iz || cell->seed != seed) {
+    lattice_corners(ix, iy, iz, seed, cell->corner);
+    cell->valid = true;
+    cell->x = ix;
+    cell->y = iy;
+    cell->z = iz;
+    cell->seed = seed;
+  }
+  return blend(cell->corner, u, v, w);
+}
+
+float albedo_of(const Surface& surface, const Eigen::Vector3d& point, AlbedoCache* cache) {
+  // Three octaves of value noise: 1/m, 2.7/m and 7.3/m (scaled per surface). Coarse octaves give
+  // large-scale gradients for the pyramid's top levels, fine ones texture for 8x8 patches.
+  const Eigen::Vector3d p = point * static_cast<double>(surface.texture_scale);
+  double v = 0.0;
+  double amplitude = 0.5;
+  double frequency = 1.0;
+  double norm = 0.0;
+  for (int octave = 0; octave < AlbedoCache::kOctaves; ++octave) {
+    v += amplitude * value_noise(p * frequency, surface.texture_seed + 977U * octave,
+                                 cache != nullptr ? &cache->cells[octave] : nullptr);
+    norm += amplitude;
+    amplitude *= 0.6;
+    frequency *= 2.7;
+  }
+  v /= norm;  // in [0, 1], mean about 0.5
+  const double a = 0.5 + static_cast<double>(surface.texture_contrast) * 2.0 * (v - 0.5);
+  return static_cast<float>(std::clamp(a, 0.02, 0.98));
 }
 
 }  // namespace
@@ -76,6 +191,7 @@ void World::add_box(const Eigen::Vector3d& center, const Eigen::Vector3d& half, 
   p.center = center;
   p.half = half;
   p.R_world_prim = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  p.axis_aligned = p.R_world_prim == Eigen::Matrix3d::Identity();
   p.surface = static_cast<std::uint32_t>(surfaces_.size());
   surfaces_.push_back(surface);
   for (int i = 0; i < 8; ++i) {
@@ -119,42 +235,89 @@ void World::build() {
   nodes_.reserve(2 * primitives_.size() + 1);
   bounds_ = Aabb{};
   for (const auto& p : primitives_) bounds_.extend(p.box);
-  if (!primitives_.empty()) build_node(0, static_cast<std::uint32_t>(primitives_.size()));
+  if (!primitives_.empty()) build_node(0, static_cast<std::uint32_t>(primitives_.size()), 0);
 }
 
-std::uint32_t World::build_node(std::uint32_t first, std::uint32_t count) {
+std::uint32_t World::build_node(std::uint32_t first, std::uint32_t count, int depth) {
   const auto index = static_cast<std::uint32_t>(nodes_.size());
   nodes_.emplace_back();
   Aabb box;
-  Aabb centroids;
-  for (std::uint32_t i = first; i < first + count; ++i) {
-    box.extend(primitives_[order_[i]].box);
-    centroids.extend(primitives_[order_[i]].box.center());
-  }
+  for (std::uint32_t i = first; i < first + count; ++i) box.extend(primitives_[order_[i]].box);
   nodes_[index].box = box;
-  if (count <= kLeafSize) {
+  // Surface-area heuristic: the split minimising the expected primitive tests of a random ray,
+  // each child weighted by the probability (area ratio) that a ray through this node enters it.
+  // Walls, floors and roads span a whole world; the heuristic gives them nodes of their own
+  // instead of inflating every box they share, so rays visit far fewer primitives.
+  constexpr double kTraversalCost = 0.5;          // one box test relative to one primitive test
+  double best_cost = static_cast<double>(count);  // a leaf
+  int best_axis = -1;
+  std::uint32_t best_left = 0;
+  std::vector<std::uint32_t> sorted(order_.begin() + first, order_.begin() + first + count);
+  std::vector<double> left_area(count);
+  const double parent_area = surface_area(box);
+  // Past kSahDepth the heuristic hands over to median splits, which bound the depth (and so the
+  // traversal stack) by log2 of the primitive count.
+  const bool sah = depth < kSahDepth;
+  for (int axis = 0; sah && axis < 3 && count > 1 && parent_area > 0.0; ++axis) {
+    sort_by_centroid(sorted, axis);
+    Aabb left;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      left.extend(primitives_[sorted[i]].box);
+      left_area[i] = surface_area(left);
+    }
+    Aabb right;
+    for (std::uint32_t n_right = 1; n_right < count; ++n_right) {
+      right.extend(primitives_[sorted[count - n_right]].box);
+      const std::uint32_t n_left = count - n_right;
+      const double cost =
+          kTraversalCost +
+          (left_area[n_left - 1] * n_left + surface_area(right) * n_right) / parent_area;
+      if (cost < best_cost) {
+        best_cost = cost;
+        best_axis = axis;
+        best_left = n_left;
+      }
+    }
+  }
+  if (!sah && count > kMedianLeafSize) {
+    // Median split along the widest centroid extent.
+    Aabb centroids;
+    for (const std::uint32_t id : sorted) centroids.extend(primitives_[id].box.center());
+    const Eigen::Vector3d extent = centroids.max - centroids.min;
+    best_axis = 0;
+    if (extent.y() > extent[best_axis]) best_axis = 1;
+    if (extent.z() > extent[best_axis]) best_axis = 2;
+    best_left = count / 2;
+  }
+  if (best_axis < 0 || count <= 1) {
     nodes_[index].first = first;
     nodes_[index].count = count;
     return index;
   }
-  // Median split along the widest centroid axis: balanced and deterministic.
-  const Eigen::Vector3d extent = centroids.max - centroids.min;
-  int axis = 0;
-  if (extent.y() > extent[axis]) axis = 1;
-  if (extent.z() > extent[axis]) axis = 2;
-  const std::uint32_t mid = first + count / 2;
-  std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + first + count,
-                   [&](std::uint32_t a, std::uint32_t b) {
-                     const double ca = primitives_[a].box.center()[axis];
-                     const double cb = primitives_[b].box.center()[axis];
-                     return ca < cb || (ca == cb && a < b);
-                   });
-  const std::uint32_t left = build_node(first, mid - first);
-  const std::uint32_t right = build_node(mid, first + count - mid);
-  nodes_[index].first = left;
-  nodes_[index].right = right;
-  nodes_[index].count = 0;
+  sort_by_centroid(sorted, best_axis);
+  std::copy(sorted.begin(), sorted.end(), order_.begin() + first);
+  const std::uint32_t left_child = build_node(first, best_left, depth + 1);
+  const std::uint32_t right_child = build_node(first + best_left, count - best_left, depth + 1);
+  Node& node = nodes_[index];
+  node.first = left_child;
+  node.right = right_child;
+  node.count = 0;
+  for (int i = 0; i < 3; ++i) {
+    node.child_min[i][0] = nodes_[left_child].box.min[i];
+    node.child_min[i][1] = nodes_[right_child].box.min[i];
+    node.child_max[i][0] = nodes_[left_child].box.max[i];
+    node.child_max[i][1] = nodes_[right_child].box.max[i];
+  }
   return index;
+}
+
+void World::sort_by_centroid(std::vector<std::uint32_t>& ids, int axis) const {
+  // Ties broken by index: the tree, and so the traversal order, is the same on every platform.
+  std::sort(ids.begin(), ids.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const double ca = primitives_[a].box.center()[axis];
+    const double cb = primitives_[b].box.center()[axis];
+    return ca < cb || (ca == cb && a < b);
+  });
 }
 
 bool World::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
@@ -163,12 +326,19 @@ bool World::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
   const Eigen::Vector3d inv_dir = dir.cwiseInverse();
   bool found = false;
   double best = t_max;
-  std::uint32_t stack[64];
+  // Front to back: the nearer child is visited next and the farther one deferred on the stack;
+  // a deferred node is skipped once a hit lies before its entry distance. Node ids and entry
+  // distances live in separate arrays (same-size stores and loads forward cheaply).
+  constexpr int kStackSize = 128;
+  std::uint32_t deferred_node[kStackSize];
+  double deferred_entry[kStackSize];
   int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& node = nodes_[stack[--top]];
-    if (!node.box.intersects(origin, inv_dir, t_min, best)) continue;
+  double entry = 0.0;
+  if (!slab_entry(nodes_[0].box, origin, inv_dir, t_min, best, entry)) return false;
+  std::uint32_t current = 0;
+  for (;;) {
+    const Node& node = nodes_[current];
+    bool descend = false;
     if (node.count > 0) {
       for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
         if (intersect_primitive(primitives_[order_[i]], origin, dir, t_min, best, hit)) {
@@ -177,10 +347,34 @@ bool World::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
           found = true;
         }
       }
-    } else if (top + 2 <= 64) {
-      stack[top++] = node.right;
-      stack[top++] = node.first;
+    } else {
+      double entries[2];
+      const int met =
+          slab_entry_pair(node.child_min, node.child_max, origin, inv_dir, t_min, best, entries);
+      const bool left = (met & 1) != 0;
+      const bool right = (met & 2) != 0;
+      const double entry_left = entries[0];
+      const double entry_right = entries[1];
+      if (left && right) {
+        const bool left_first = entry_left <= entry_right;
+        // The stack holds at most the tree depth: below kSahDepth + log2(primitives).
+        if (top < kStackSize) {
+          deferred_node[top] = left_first ? node.right : node.first;
+          deferred_entry[top] = left_first ? entry_right : entry_left;
+          ++top;
+        }
+        current = left_first ? node.first : node.right;
+        descend = true;
+      } else if (left || right) {
+        current = left ? node.first : node.right;
+        descend = true;
+      }
     }
+    if (descend) continue;
+    // Next deferred node still in front of the best hit.
+    while (top > 0 && deferred_entry[top - 1] > best) --top;
+    if (top == 0) break;
+    current = deferred_node[--top];
   }
   return found;
 }
@@ -192,8 +386,12 @@ bool World::intersect_primitive(const Primitive& p, const Eigen::Vector3d& origi
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   switch (p.kind) {
     case Kind::kBox: {
-      const Eigen::Vector3d o = p.R_world_prim.transpose() * (origin - p.center);
-      const Eigen::Vector3d d = p.R_world_prim.transpose() * dir;
+      // Most boxes are axis-aligned: skip the frame change (identity products are exact anyway).
+      const Eigen::Vector3d o =
+          p.axis_aligned ? Eigen::Vector3d(origin - p.center)
+                         : Eigen::Vector3d(p.R_world_prim.transpose() * (origin - p.center));
+      const Eigen::Vector3d d =
+          p.axis_aligned ? dir : Eigen::Vector3d(p.R_world_prim.transpose() * dir);
       double t_near = -std::numeric_limits<double>::infinity();
       double t_far = std::numeric_limits<double>::infinity();
       int near_axis = 0;
@@ -224,7 +422,7 @@ bool World::intersect_primitive(const Primitive& p, const Eigen::Vector3d& origi
       }
       Eigen::Vector3d n_local = Eigen::Vector3d::Zero();
       n_local[axis] = d[axis] > 0 ? -1.0 : 1.0;
-      normal = p.R_world_prim * n_local;
+      normal = p.axis_aligned ? n_local : Eigen::Vector3d(p.R_world_prim * n_local);
       break;
     }
     case Kind::kCylinder: {
@@ -288,22 +486,11 @@ bool World::intersect_primitive(const Primitive& p, const Eigen::Vector3d& origi
 }
 
 float World::albedo(const Surface& surface, const Eigen::Vector3d& point) {
-  // Three octaves of value noise: 1/m, 2.7/m and 7.3/m (scaled per surface). Coarse octaves give
-  // large-scale gradients for the pyramid's top levels, fine ones texture for 8x8 patches.
-  const Eigen::Vector3d p = point * static_cast<double>(surface.texture_scale);
-  double v = 0.0;
-  double amplitude = 0.5;
-  double frequency = 1.0;
-  double norm = 0.0;
-  for (int octave = 0; octave < 3; ++octave) {
-    v += amplitude * value_noise(p * frequency, surface.texture_seed + 977U * octave);
-    norm += amplitude;
-    amplitude *= 0.6;
-    frequency *= 2.7;
-  }
-  v /= norm;  // in [0, 1], mean about 0.5
-  const double a = 0.5 + static_cast<double>(surface.texture_contrast) * 2.0 * (v - 0.5);
-  return static_cast<float>(std::clamp(a, 0.02, 0.98));
+  return albedo_of(surface, point, nullptr);
+}
+
+float World::albedo(const Surface& surface, const Eigen::Vector3d& point, AlbedoCache& cache) {
+  return albedo_of(surface, point, &cache);
 }
 
 }  // namespace livod::sim

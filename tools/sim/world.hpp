@@ -44,6 +44,20 @@ struct Aabb {
                                 double t_min, double t_max) const;
 };
 
+// The lattice values of the value-noise cells an albedo lookup used last, one cell per octave.
+// Neighbouring pixels mostly fall into the same cells, so a renderer passes one cache through a
+// frame; albedo() returns exactly the same value with or without it.
+struct AlbedoCache {
+  static constexpr int kOctaves = 3;
+  struct Cell {
+    bool valid = false;
+    std::int64_t x = 0, y = 0, z = 0;
+    std::uint32_t seed = 0;
+    double corner[8] = {};  // lattice values, index a*4 + b*2 + d for offsets (a, b, d)
+  };
+  Cell cells[kOctaves];
+};
+
 class World {
  public:
   // A box of half extents `half` centred at `center`, rotated by `yaw` (rad) about z.
@@ -64,6 +78,8 @@ class World {
   // Grey-level albedo in [0, 1] of the surface at a world point: smooth multi-octave value noise,
   // rich enough in gradient for photometric tracking, identical for every viewpoint.
   [[nodiscard]] static float albedo(const Surface& surface, const Eigen::Vector3d& point);
+  [[nodiscard]] static float albedo(const Surface& surface, const Eigen::Vector3d& point,
+                                    AlbedoCache& cache);
 
   [[nodiscard]] std::size_t primitive_count() const { return primitives_.size(); }
   [[nodiscard]] const Aabb& bounds() const { return bounds_; }
@@ -75,6 +91,7 @@ class World {
     Eigen::Vector3d center = Eigen::Vector3d::Zero();  // box/sphere centre, cylinder base centre
     Eigen::Vector3d half = Eigen::Vector3d::Zero();    // box half extents; (r, r, h) cylinder
     Eigen::Matrix3d R_world_prim = Eigen::Matrix3d::Identity();
+    bool axis_aligned = true;  // R_world_prim is exactly the identity: no frame change needed
     double radius = 0.0;
     std::uint32_t surface = 0;
     Aabb box;
@@ -84,11 +101,16 @@ class World {
     std::uint32_t first = 0;  // leaf: first primitive index in order_; inner: left child index
     std::uint32_t count = 0;  // leaf: primitive count; 0 for inner nodes
     std::uint32_t right = 0;  // inner: right child index
+    // Inner nodes: the children's boxes per axis, [axis][0] left, [axis][1] right, so that the
+    // traversal tests both with one pair of two-lane operations.
+    alignas(16) double child_min[3][2] = {};
+    alignas(16) double child_max[3][2] = {};
   };
 
   bool intersect_primitive(const Primitive& p, const Eigen::Vector3d& origin,
                            const Eigen::Vector3d& dir, double t_min, double t_max, Hit& hit) const;
-  std::uint32_t build_node(std::uint32_t first, std::uint32_t count);
+  std::uint32_t build_node(std::uint32_t first, std::uint32_t count, int depth);
+  void sort_by_centroid(std::vector<std::uint32_t>& ids, int axis) const;
 
   std::vector<Surface> surfaces_;
   std::vector<Primitive> primitives_;
