@@ -1,8 +1,8 @@
 // livod: one binary, subcommands for live operation, replay, decoding, simulation and tools.
 
+#include <fmt/core.h>
 #include <CLI/CLI.hpp>
 #include <exception>
-#include <fmt/core.h>
 
 #include "daemon/commands/command.hpp"
 #include "daemon/logging.hpp"
@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   livod::daemon::CommandContext ctx;
   livod::daemon::add_version_command(app, ctx);
   // COMMAND-REGISTRATIONS (one line per subcommand; keep sorted)
+  livod::daemon::add_replay_command(app, ctx);
   livod::daemon::add_decode_command(app, ctx);
   livod::daemon::add_inspect_command(app, ctx);
   livod::daemon::add_sim_command(app, ctx);

@@ -55,7 +55,7 @@ struct FrameReport {
   bool updated = false;  // false: first frame (map seeded) or too few matches
   DegeneracyReport degeneracy;
   FrameTimings timings;
-  VoxelMapStats map;
+  VoxelMapStats map;  // refreshed every 10th frame (a full traversal), else the last refresh
 };
 
 struct PipelineOutput {
@@ -93,6 +93,11 @@ class LioPipeline {
   [[nodiscard]] const PipelineCounters& counters() const { return counters_; }
   [[nodiscard]] const VoxelMap& map() const { return *map_; }
   [[nodiscard]] const Belief& belief() const { return belief_; }
+  // The points of the scan processed last, as the update used them: undistorted to the scan end
+  // and downsampled, in the LiDAR frame. Valid until the next process() (map export in replay).
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& last_scan_points() const {
+    return undistorted_;
+  }
 
  private:
   struct QueuedScan {
@@ -119,6 +124,8 @@ class LioPipeline {
   std::vector<Eigen::Vector3d> undistorted_;
   std::vector<ScanPoint> scan_points_;
   std::vector<CovPoint> world_points_;
+  static constexpr std::uint64_t kMapStatsPeriod = 10;
+  VoxelMapStats map_stats_;
 };
 
 }  // namespace livod::estimator

@@ -3,31 +3,61 @@
 #include <cmath>
 
 namespace livod::estimator {
+namespace {
+
+std::uint64_t mix(std::uint64_t k) {
+  // splitmix64 finaliser: packed lattice keys differ in few bits, the table needs all of them.
+  k ^= k >> 30;
+  k *= 0xbf58476d1ce4e5b9ULL;
+  k ^= k >> 27;
+  k *= 0x94d049bb133111ebULL;
+  k ^= k >> 31;
+  return k;
+}
+
+}  // namespace
+
+void VoxelGridDownsampler::reserve_slots(std::size_t points) {
+  // At most half full even if every point has its own cell.
+  std::size_t n = slots_.empty() ? 1024 : slots_.size();
+  while (n < 2 * points) n *= 2;
+  if (n != slots_.size()) {
+    slots_.assign(n, Slot{});
+    generation_ = 0;
+  }
+}
 
 void VoxelGridDownsampler::apply(std::vector<Eigen::Vector3d>& points) {
   if (cell_ <= 0.0) return;
+  reserve_slots(points.size());
+  if (++generation_ == 0) {  // wrapped: stale stamps could match again
+    for (auto& s : slots_) s.generation = 0;
+    generation_ = 1;
+  }
   cells_.clear();
-  order_.clear();
+  const std::size_t mask = slots_.size() - 1;
   for (const auto& p : points) {
     // 21 bits per axis (+-1M cells, +-104 km at 0.1 m) packed into one key.
-    const auto ix = static_cast<std::int64_t>(std::floor(p.x() / cell_)) & 0x1FFFFF;
-    const auto iy = static_cast<std::int64_t>(std::floor(p.y() / cell_)) & 0x1FFFFF;
-    const auto iz = static_cast<std::int64_t>(std::floor(p.z() / cell_)) & 0x1FFFFF;
+    const auto ix = static_cast<std::int64_t>(std::floor(p.x() * inv_cell_)) & 0x1FFFFF;
+    const auto iy = static_cast<std::int64_t>(std::floor(p.y() * inv_cell_)) & 0x1FFFFF;
+    const auto iz = static_cast<std::int64_t>(std::floor(p.z() * inv_cell_)) & 0x1FFFFF;
     const std::uint64_t key = (static_cast<std::uint64_t>(ix) << 42) |
                               (static_cast<std::uint64_t>(iy) << 21) |
                               static_cast<std::uint64_t>(iz);
-    auto [it, inserted] = cells_.try_emplace(key);
-    if (inserted) {
-      it->second.order = static_cast<std::uint32_t>(order_.size());
-      order_.push_back(key);
+    std::size_t i = mix(key) & mask;
+    while (slots_[i].generation == generation_ && slots_[i].key != key) i = (i + 1) & mask;
+    Slot& slot = slots_[i];
+    if (slot.generation != generation_) {
+      slot = Slot{key, generation_, static_cast<std::uint32_t>(cells_.size())};
+      cells_.push_back(Cell{});
     }
-    it->second.sum += p;
-    ++it->second.count;
+    Cell& c = cells_[slot.cell];
+    c.sum += p;
+    ++c.count;
   }
-  points.resize(order_.size());
-  for (std::size_t i = 0; i < order_.size(); ++i) {
-    const Cell& c = cells_.at(order_[i]);
-    points[i] = c.sum / static_cast<double>(c.count);
+  points.resize(cells_.size());
+  for (std::size_t i = 0; i < cells_.size(); ++i) {
+    points[i] = cells_[i].sum / static_cast<double>(cells_[i].count);
   }
 }
 

@@ -14,7 +14,8 @@ PlaneRowJacobian point_to_plane_jacobian(const Plane& plane, const Eigen::Vector
   PlaneRowJacobian r;
   const Eigen::Vector3d& n = plane.normal;
   r.h = n.dot(x.R_world_imu * p_imu + x.p_world_imu) + plane.d;
-  r.H.leftCols<3>() = (so3::hat(p_imu) * x.R_world_imu.transpose() * n).transpose();
+  // [p]x R^T n, as a cross product (a 3x3 product per point otherwise).
+  r.H.leftCols<3>() = p_imu.cross(x.R_world_imu.transpose() * n).transpose();
   r.H.rightCols<3>() = n.transpose();
   return r;
 }
@@ -25,6 +26,7 @@ PointToPlane::PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_l
 bool PointToPlane::linearize(const std::vector<ScanPoint>& points, const State& x,
                              NormalEquations& eq, int min_matches) {
   rows_.resize(points.size());
+  hints_.resize(points.size());
   const Eigen::Matrix3d R = x.R_world_imu;
   const Eigen::Matrix3d R_wl = R * T_imu_lidar_.linear();
   auto work = [&](std::size_t begin, std::size_t end) {
@@ -35,7 +37,7 @@ bool PointToPlane::linearize(const std::vector<ScanPoint>& points, const State& 
       const Eigen::Vector3d p_w = R * p_i + x.p_world_imu;
       const Eigen::Matrix3d cov_w = R_wl * points[i].cov_lidar * R_wl.transpose();
       PlaneMatch m;
-      if (!map_.match(p_w, cov_w, m)) continue;
+      if (!map_.match(p_w, cov_w, m, hints_[i])) continue;
       const PlaneRowJacobian j = point_to_plane_jacobian(*m.plane, p_i, x);
       row.matched = true;
       row.H = j.H;

@@ -61,6 +61,7 @@ class PointToPlane {
   Eigen::Isometry3d T_imu_lidar_;
   int threads_;
   std::vector<Row> rows_;
+  std::vector<VoxelMap::Hint> hints_;  // per point, reused over the iterations of one update
   PointToPlaneStats stats_;
 };
 

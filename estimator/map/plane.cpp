@@ -30,16 +30,24 @@ Decomposition decompose(const std::vector<CovPoint>& points) {
   return out;
 }
 
-Eigen::Matrix<double, 6, 3> jacobian(const Decomposition& dec, const Eigen::Vector3d& n,
-                                     const Eigen::Vector3d& p, double count) {
-  Eigen::Matrix<double, 6, 3> J = Eigen::Matrix<double, 6, 3>::Zero();
+// d n / d p_j (the top block of the Jacobian; the centre's is I / N).
+Eigen::Matrix3d normal_jacobian(const Decomposition& dec, const Eigen::Vector3d& n,
+                                const Eigen::Vector3d& p, double count) {
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   const Eigen::Vector3d e = p - dec.center;
   for (int m = 1; m < 3; ++m) {
     const double gap = dec.values(0) - dec.values(m);
     if (std::abs(gap) < 1e-12) continue;  // degenerate: no information along this direction
     const Eigen::Vector3d um = dec.vectors.col(m);
-    J.topRows<3>() += um * (e.dot(n) * um.transpose() + e.dot(um) * n.transpose()) / (count * gap);
+    A += um * (e.dot(n) * um.transpose() + e.dot(um) * n.transpose()) / (count * gap);
   }
+  return A;
+}
+
+Eigen::Matrix<double, 6, 3> jacobian(const Decomposition& dec, const Eigen::Vector3d& n,
+                                     const Eigen::Vector3d& p, double count) {
+  Eigen::Matrix<double, 6, 3> J;
+  J.topRows<3>() = normal_jacobian(dec, n, p, count);
   J.bottomRows<3>() = Eigen::Matrix3d::Identity() / count;
   return J;
 }
@@ -58,11 +66,25 @@ Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value) {
   plane.radius = std::sqrt(std::max(0.0, dec.values(2)));
   plane.is_plane = dec.values(0) < min_eigen_value;
   if (!plane.is_plane) return plane;
+  // cov = sum_j J_j C_j J_j^T with J_j = [A_j; I/N]: accumulated per block (nn, nq, qq), which
+  // is less than half the work of the full 6x3 products.
   const double count = static_cast<double>(points.size());
+  Eigen::Matrix3d nn = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d nq = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d qq = Eigen::Matrix3d::Zero();
   for (const auto& p : points) {
-    const Eigen::Matrix<double, 6, 3> J = jacobian(dec, plane.normal, p.p, count);
-    plane.cov += J * p.cov * J.transpose();
+    const Eigen::Matrix3d A = normal_jacobian(dec, plane.normal, p.p, count);
+    const Eigen::Matrix3d AC = A * p.cov;
+    nn.noalias() += AC * A.transpose();
+    nq += AC;
+    qq += p.cov;
   }
+  nq /= count;
+  qq /= count * count;
+  plane.cov.topLeftCorner<3, 3>() = nn;
+  plane.cov.topRightCorner<3, 3>() = nq;
+  plane.cov.bottomLeftCorner<3, 3>() = nq.transpose();
+  plane.cov.bottomRightCorner<3, 3>() = qq;
   return plane;
 }
 

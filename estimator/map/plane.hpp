@@ -18,15 +18,17 @@ struct CovPoint {
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // world frame
 };
 
+// Members are ordered for matching: what the association gates read (is_plane, normal, d,
+// center, radius) shares the first cache line; the 288-byte covariance comes last.
 struct Plane {
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, smallest-eigenvalue eigenvector
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  double d = 0.0;                                         // n.x + d = 0 on the plane
-  Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();  // ascending
-  double radius = 0.0;                                    // sqrt(largest eigenvalue)
-  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();  // over (n, q)
-  int points = 0;
   bool is_plane = false;
+  int points = 0;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, smallest-eigenvalue eigenvector
+  double d = 0.0;                                     // n.x + d = 0 on the plane
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0.0;                                    // sqrt(largest eigenvalue)
+  Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();  // ascending
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();  // over (n, q)
 };
 
 // Fits `points`; is_plane = smallest eigenvalue < min_eigen_value. Needs >= 3 points.

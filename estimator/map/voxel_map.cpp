@@ -11,16 +11,17 @@ VoxelKey voxel_key(const Eigen::Vector3d& p, double voxel_size) {
 }
 
 struct VoxelMap::Node {
+  // What matching reads first (split, children, the plane's gate fields) is kept together.
+  bool split = false;
+  bool initialized = false;
+  bool frozen = false;
   int layer = 0;
+  int new_points = 0;  // since the last fit
+  std::array<std::unique_ptr<Node>, 8> children;
+  Plane plane;
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // of the node's cube
   double half = 0.0;                                 // half edge of the cube
   std::vector<CovPoint> points;                      // kept until the node freezes
-  int new_points = 0;                                // since the last fit
-  bool initialized = false;
-  bool frozen = false;
-  Plane plane;
-  std::array<std::unique_ptr<Node>, 8> children;
-  bool split = false;
 
   int octant(const Eigen::Vector3d& p) const {
     return (p.x() >= center.x() ? 1 : 0) | (p.y() >= center.y() ? 2 : 0) |
@@ -90,27 +91,34 @@ struct VoxelMap::Node {
     }
   }
 
-  // Best plane in this subtree for p (highest likelihood passing the gates).
+  // Best plane in this subtree for p (highest likelihood passing the gates). best.plane == nullptr
+  // means no candidate yet.
   void best_match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, double sigma_num,
-                  PlaneMatch& best, double& best_likelihood) const {
+                  PlaneMatch& best) const {
     if (plane.is_plane && !split) {
+      // The in-plane extent gate needs only the distance: test it before the variance, which
+      // costs a 6x6 quadratic form. Gates compare squares (no square roots).
+      const double distance = plane.normal.dot(p) + plane.d;
+      const double along = (p - plane.center).squaredNorm() - distance * distance;
+      if (std::max(0.0, along) > 9.0 * plane.radius * plane.radius) return;
       const PlaneResidual r = plane_residual(plane, p, cov);
-      const double along = (p - plane.center).squaredNorm() - r.distance * r.distance;
-      const double in_plane = std::sqrt(std::max(0.0, along));
-      if (in_plane <= 3.0 * plane.radius && r.variance > 0.0 &&
-          std::abs(r.distance) < sigma_num * std::sqrt(r.variance)) {
-        const double likelihood =
-            std::exp(-0.5 * r.distance * r.distance / r.variance) / std::sqrt(r.variance);
-        if (likelihood > best_likelihood) {
-          best_likelihood = likelihood;
-          best = PlaneMatch{&plane, r.distance, r.variance};
-        }
+      if (!(r.variance > 0.0) || r.distance * r.distance >= sigma_num * sigma_num * r.variance) {
+        return;
+      }
+      // Most points have one candidate: the likelihoods are only needed to choose between two.
+      if (best.plane == nullptr ||
+          likelihood(r.distance, r.variance) > likelihood(best.distance, best.variance)) {
+        best = PlaneMatch{&plane, r.distance, r.variance};
       }
       return;
     }
     for (const auto& c : children) {
-      if (c) c->best_match(p, cov, sigma_num, best, best_likelihood);
+      if (c) c->best_match(p, cov, sigma_num, best);
     }
+  }
+
+  static double likelihood(double distance, double variance) {
+    return std::exp(-0.5 * distance * distance / variance) / std::sqrt(variance);
   }
 
   void accumulate(VoxelMapStats& s) const {
@@ -131,9 +139,17 @@ VoxelMap::VoxelMap(VoxelMap&&) noexcept = default;
 VoxelMap& VoxelMap::operator=(VoxelMap&&) noexcept = default;
 
 void VoxelMap::insert(const std::vector<CovPoint>& points) {
+  ++generation_;
   const double vs = lio_.voxel_size;
+  // Consecutive points of a scan often share a voxel: reuse the last lookup.
+  VoxelKey last_key;
+  Node* last = nullptr;
   for (const auto& p : points) {
     const VoxelKey key = voxel_key(p.p, vs);
+    if (last != nullptr && key == last_key) {
+      last->insert(p, lio_);
+      continue;
+    }
     auto& root = roots_[key];
     if (!root) {
       root = std::make_unique<Node>();
@@ -143,17 +159,25 @@ void VoxelMap::insert(const std::vector<CovPoint>& points) {
                                      (static_cast<double>(key.z) + 0.5) * vs);
     }
     root->insert(p, lio_);
+    last_key = key;
+    last = root.get();
   }
 }
 
 bool VoxelMap::match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, PlaneMatch& out) const {
+  Hint hint;
+  return match(p, cov, out, hint);
+}
+
+bool VoxelMap::match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, PlaneMatch& out,
+                     Hint& hint) const {
   const double vs = lio_.voxel_size;
   const VoxelKey key = voxel_key(p, vs);
-  double best = 0.0;
-  PlaneMatch m;
-  if (auto it = roots_.find(key); it != roots_.end()) {
-    it->second->best_match(p, cov, lio_.sigma_num, m, best);
+  if (hint.generation != generation_ || !(hint.key == key)) {
+    hint = Hint{key, roots_.find(key), generation_};
   }
+  PlaneMatch m;
+  if (hint.root != nullptr) hint.root->best_match(p, cov, lio_.sigma_num, m);
   if (m.plane == nullptr) {
     // Neighbour fallback, in voxel units: the voxels across the faces the point is near.
     const Eigen::Vector3d frac(p.x() / vs - static_cast<double>(key.x),
@@ -166,9 +190,7 @@ bool VoxelMap::match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, Plane
       if (step == 0) continue;
       VoxelKey n = key;
       (axis == 0 ? n.x : axis == 1 ? n.y : n.z) += step;
-      if (auto it = roots_.find(n); it != roots_.end()) {
-        it->second->best_match(p, cov, lio_.sigma_num, m, best);
-      }
+      if (const Node* root = roots_.find(n)) root->best_match(p, cov, lio_.sigma_num, m);
     }
   }
   if (m.plane == nullptr) return false;
@@ -184,32 +206,100 @@ std::size_t VoxelMap::slide(const Eigen::Vector3d& position) {
   const double vs = lio_.voxel_size;
   const VoxelKey c = voxel_key(position, vs);
   const auto reach = static_cast<std::int64_t>(std::ceil(map_.half_extent_m / vs));
-  std::size_t removed = 0;
-  for (auto it = roots_.begin(); it != roots_.end();) {
-    const VoxelKey& k = it->first;
-    if (std::abs(k.x - c.x) > reach || std::abs(k.y - c.y) > reach || std::abs(k.z - c.z) > reach) {
-      it = roots_.erase(it);
-      ++removed;
-    } else {
-      ++it;
-    }
-  }
+  const std::size_t removed = roots_.erase_if([&](const VoxelKey& k) {
+    return std::abs(k.x - c.x) > reach || std::abs(k.y - c.y) > reach ||
+           std::abs(k.z - c.z) > reach;
+  });
   removed_ += removed;
+  if (removed > 0) ++generation_;
   return removed;
 }
 
 VoxelMapStats VoxelMap::stats() const {
   VoxelMapStats s;
   s.root_voxels = roots_.size();
-  s.bytes = roots_.bucket_count() * sizeof(void*) +
-            roots_.size() * (sizeof(VoxelKey) + sizeof(std::unique_ptr<Node>) + 2 * sizeof(void*));
-  for (const auto& [key, node] : roots_) node->accumulate(s);
+  s.bytes = roots_.bytes();
+  roots_.for_each([&s](const Node& node) { node.accumulate(s); });
   s.removed_voxels = removed_;
   return s;
 }
 
 bool VoxelMap::empty() const {
-  return roots_.empty();
+  return roots_.size() == 0;
+}
+
+// ---- RootTable --------------------------------------------------------------------------------
+
+namespace {
+constexpr std::size_t kInitialRootSlots = 1024;
+}  // namespace
+
+VoxelMap::RootTable::RootTable() {
+  entries_.resize(kInitialRootSlots);
+}
+VoxelMap::RootTable::~RootTable() = default;
+VoxelMap::RootTable::RootTable(RootTable&&) noexcept = default;
+VoxelMap::RootTable& VoxelMap::RootTable::operator=(RootTable&&) noexcept = default;
+
+VoxelMap::Node* VoxelMap::RootTable::find(const VoxelKey& key) const {
+  const std::size_t mask = entries_.size() - 1;
+  for (std::size_t i = VoxelKeyHash{}(key)&mask;; i = (i + 1) & mask) {
+    const Entry& e = entries_[i];
+    if (!e.node) return nullptr;
+    if (e.key == key) return e.node.get();
+  }
+}
+
+std::unique_ptr<VoxelMap::Node>& VoxelMap::RootTable::operator[](const VoxelKey& key) {
+  if (2 * (size_ + 1) > entries_.size()) rehash(2 * entries_.size());
+  const std::size_t mask = entries_.size() - 1;
+  std::size_t i = VoxelKeyHash{}(key)&mask;
+  for (; entries_[i].node; i = (i + 1) & mask) {
+    if (entries_[i].key == key) return entries_[i].node;
+  }
+  // The caller fills the new entry (insert() always does): an empty node would end probe runs.
+  entries_[i].key = key;
+  ++size_;
+  return entries_[i].node;
+}
+
+void VoxelMap::RootTable::rehash(std::size_t slots) {
+  std::vector<Entry> old;
+  old.swap(entries_);
+  entries_.resize(slots);
+  size_ = 0;
+  const std::size_t mask = slots - 1;
+  for (auto& e : old) {
+    if (!e.node) continue;
+    std::size_t i = VoxelKeyHash{}(e.key) & mask;
+    while (entries_[i].node) i = (i + 1) & mask;
+    entries_[i] = std::move(e);
+    ++size_;
+  }
+}
+
+std::size_t VoxelMap::RootTable::erase_if(const std::function<bool(const VoxelKey&)>& remove) {
+  std::size_t removed = 0;
+  for (auto& e : entries_) {
+    if (e.node && remove(e.key)) {
+      e.node.reset();
+      ++removed;
+    }
+  }
+  // Linear probing cannot leave holes inside probe runs: rebuild (slides are rare, every
+  // slide_threshold metres).
+  if (removed > 0) rehash(entries_.size());
+  return removed;
+}
+
+void VoxelMap::RootTable::for_each(const std::function<void(const Node&)>& visit) const {
+  for (const auto& e : entries_) {
+    if (e.node) visit(*e.node);
+  }
+}
+
+std::size_t VoxelMap::RootTable::bytes() const {
+  return entries_.capacity() * sizeof(Entry);
 }
 
 }  // namespace livod::estimator

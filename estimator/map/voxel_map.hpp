@@ -9,8 +9,8 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
-#include <unordered_map>
 #include <vector>
 
 #include "estimator/map/plane.hpp"
@@ -25,8 +25,15 @@ struct VoxelKey {
 
 struct VoxelKeyHash {
   std::size_t operator()(const VoxelKey& k) const {
-    // Large primes mix the three coordinates (cheap and well spread for lattice keys).
-    return static_cast<std::size_t>(k.x * 73856093LL ^ k.y * 19349669LL ^ k.z * 83492791LL);
+    // Large primes combine the three coordinates, the splitmix64 finaliser spreads the result
+    // over every bit (neighbouring lattice keys otherwise share buckets).
+    auto h = static_cast<std::uint64_t>(k.x * 73856093LL ^ k.y * 19349669LL ^ k.z * 83492791LL);
+    h ^= h >> 30;
+    h *= 0xbf58476d1ce4e5b9ULL;
+    h ^= h >> 27;
+    h *= 0x94d049bb133111ebULL;
+    h ^= h >> 31;
+    return static_cast<std::size_t>(h);
   }
 };
 
@@ -64,6 +71,18 @@ class VoxelMap {
   bool match(const Eigen::Vector3d& p_world, const Eigen::Matrix3d& cov_world,
              PlaneMatch& out) const;
 
+  struct Node;
+  // The root voxel a point was last matched in. match() with a hint skips the hash lookup of the
+  // point's own voxel while the point stays in that voxel and the map is unchanged, which is the
+  // case over the iterations of one update (the lookup is a large part of matching).
+  struct Hint {
+    VoxelKey key;
+    const Node* root = nullptr;
+    std::uint64_t generation = 0;  // 0: empty; the map's generation_ starts at 1
+  };
+  bool match(const Eigen::Vector3d& p_world, const Eigen::Matrix3d& cov_world, PlaneMatch& out,
+             Hint& hint) const;
+
   // Drops root voxels farther than half_extent (per axis) from `position` once the sensor has
   // moved slide_threshold since the last slide. Returns the number of voxels removed.
   std::size_t slide(const Eigen::Vector3d& position);
@@ -71,15 +90,41 @@ class VoxelMap {
   [[nodiscard]] VoxelMapStats stats() const;
   [[nodiscard]] bool empty() const;
 
-  struct Node;
-
  private:
   LioParams lio_;
   MapParams map_;
-  std::unordered_map<VoxelKey, std::unique_ptr<Node>, VoxelKeyHash> roots_;
+  // Root voxels by key: open addressing with linear probing, kept at most half full. A lookup
+  // is one probe run in one array; std::unordered_map chased two pointers per lookup, which
+  // dominated matching on large (street) maps.
+  class RootTable {
+   public:
+    RootTable();
+    ~RootTable();
+    RootTable(RootTable&&) noexcept;
+    RootTable& operator=(RootTable&&) noexcept;
+    [[nodiscard]] Node* find(const VoxelKey& key) const;
+    // The entry of `key`, created empty (nullptr) when absent; the caller fills it.
+    std::unique_ptr<Node>& operator[](const VoxelKey& key);
+    // Removes the roots whose key satisfies `remove`; returns how many.
+    std::size_t erase_if(const std::function<bool(const VoxelKey&)>& remove);
+    void for_each(const std::function<void(const Node&)>& visit) const;
+    [[nodiscard]] std::size_t size() const { return size_; }
+    [[nodiscard]] std::size_t bytes() const;
+
+   private:
+    struct Entry {
+      VoxelKey key;
+      std::unique_ptr<Node> node;  // nullptr: free slot
+    };
+    void rehash(std::size_t slots);
+    std::vector<Entry> entries_;
+    std::size_t size_ = 0;
+  };
+  RootTable roots_;
   Eigen::Vector3d last_slide_position_ = Eigen::Vector3d::Zero();
   bool slid_once_ = false;
   std::uint64_t removed_ = 0;
+  std::uint64_t generation_ = 1;  // bumped by every change of the map (invalidates hints)
 };
 
 }  // namespace livod::estimator

@@ -79,8 +79,8 @@ RunResult run_livox(const std::string& scenario_name, const std::string& model, 
     const double rot = so3::log(gt.linear().transpose() * o.x.R_world_imu).norm() * 180.0 / M_PI;
     sum += e * e;
     if (std::getenv("LIVOD_TEST_VERBOSE") != nullptr) {
-      std::printf("t %.2f err %.4f rot %.3f matched %d/%d iters %d degen %d ratio %.4f\n", t, e, rot,
-                  o.report.matched, o.report.used_points, o.report.iterations,
+      std::printf("t %.2f err %.4f rot %.3f matched %d/%d iters %d degen %d ratio %.4f\n", t, e,
+                  rot, o.report.matched, o.report.used_points, o.report.iterations,
                   o.report.degeneracy.degenerate ? 1 : 0, o.report.degeneracy.translation_ratio);
     }
     r.max_m = std::max(r.max_m, e);

@@ -98,7 +98,8 @@ TrajectorySpec drone_street() {
   TrajectorySpec s;
   s.x = {0.0, 5.0, {}};
   s.y = {0.0, 0.0, {{3.0, 0.2, 0.0}}};
-  s.z = {1.0, 0.0, {{-4.0, 0.15, -M_PI / 2}}};  // climbs from 1 m to ~9 m and back
+  // 5 - 4 cos(0.15 tau): starts 1 m above the street, climbs to 9 m and comes back down.
+  s.z = {5.0, 0.0, {{4.0, 0.15, -M_PI / 2}}};
   s.roll = {0.0, 0.0, {{0.08, 0.9, 0.0}}};
   s.pitch = {0.0, 0.0, {{0.1, 0.7, 0.3}}};
   s.yaw = {0.0, 0.0, {{0.6, 0.3, 0.0}}};

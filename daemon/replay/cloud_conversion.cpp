@@ -1,0 +1,111 @@
+#include "daemon/replay/cloud_conversion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace livod::daemon::replay {
+namespace {
+
+namespace rb = io::rosbag;
+
+constexpr std::int64_t kMaxOffsetNs = std::numeric_limits<std::int32_t>::max();
+
+bool usable(float x, float y, float z) {
+  return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) &&
+         !(x == 0.0F && y == 0.0F && z == 0.0F);
+}
+
+// Appends one point whose time is `t_ns` on the recording clock; the scan start must be set.
+void push_point(LidarScan& out, float x, float y, float z, float intensity, std::uint16_t ring,
+                std::int64_t t_ns, CloudConversionStats& stats) {
+  const std::int64_t offset = t_ns - out.start.sensor.ns;
+  if (offset < 0 || offset > kMaxOffsetNs) {
+    ++stats.dropped_points;
+    return;
+  }
+  const bool valid = usable(x, y, z);
+  if (!valid) ++stats.invalid_points;
+  ++stats.points;
+  out.push_back(x, y, z, intensity, ring, 0, static_cast<std::int32_t>(offset), valid);
+}
+
+}  // namespace
+
+double nanoseconds_per(TimeUnit unit) {
+  switch (unit) {
+    case TimeUnit::ns:
+      return 1.0;
+    case TimeUnit::us:
+      return 1e3;
+    case TimeUnit::ms:
+      return 1e6;
+    case TimeUnit::s:
+      return 1e9;
+  }
+  return 1.0;
+}
+
+bool custom_msg_to_scan(const rb::livox_ros_driver::CustomMsg& msg, LidarScan& out,
+                        CloudConversionStats& stats) {
+  ++stats.messages;
+  out.clear();
+  if (msg.points.empty()) {
+    ++stats.empty_messages;
+    return false;
+  }
+  const std::int64_t base =
+      msg.timebase != 0 ? static_cast<std::int64_t>(msg.timebase) : msg.header.stamp.to_ns();
+  std::uint32_t first = std::numeric_limits<std::uint32_t>::max();
+  for (const auto& p : msg.points) first = std::min(first, p.offset_time);
+  out.start.sensor = SensorTime(base + first);
+  out.reserve(msg.points.size());
+  for (const auto& p : msg.points) {
+    push_point(out, p.x, p.y, p.z, static_cast<float>(p.reflectivity), p.line,
+               base + static_cast<std::int64_t>(p.offset_time), stats);
+  }
+  return !out.empty();
+}
+
+bool point_cloud_to_scan(const rb::sensor_msgs::PointCloud2& cloud, const DatasetConfig& dataset,
+                         std::vector<rb::CloudPoint>& scratch, LidarScan& out,
+                         CloudConversionStats& stats) {
+  ++stats.messages;
+  out.clear();
+  rb::CloudFields fields;
+  fields.time = dataset.time_field;
+  const auto names = rb::field_names(cloud);
+  auto has = [&names](const char* n) {
+    return std::find(names.begin(), names.end(), n) != names.end();
+  };
+  fields.intensity = has("intensity") ? "intensity" : (has("reflectivity") ? "reflectivity" : "");
+  rb::extract_points(cloud, fields, scratch);
+  if (scratch.empty()) {
+    ++stats.empty_messages;
+    return false;
+  }
+
+  const double scale = nanoseconds_per(dataset.time_unit);
+  auto to_ns = [scale](double v) { return static_cast<std::int64_t>(std::llround(v * scale)); };
+  std::int64_t lo = std::numeric_limits<std::int64_t>::max();
+  std::int64_t hi = std::numeric_limits<std::int64_t>::min();
+  for (const auto& p : scratch) {
+    const std::int64_t t = to_ns(p.time);
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
+  }
+  // Point time = base + value.
+  std::int64_t base = 0;
+  if (dataset.time_reference == TimeReference::relative) {
+    const std::int64_t stamp = cloud.header.stamp.to_ns();
+    base = (dataset.stamp == ScanStamp::end && lo >= 0) ? stamp - hi : stamp;
+  }
+  out.start.sensor = SensorTime(base + lo);
+  out.reserve(scratch.size());
+  for (const auto& p : scratch) {
+    push_point(out, p.x, p.y, p.z, p.intensity, 0, base + to_ns(p.time), stats);
+  }
+  return !out.empty();
+}
+
+}  // namespace livod::daemon::replay

@@ -1,0 +1,98 @@
+#include "daemon/replay/map_accumulator.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "core/error.hpp"
+
+namespace livod::daemon::replay {
+namespace {
+
+constexpr std::size_t kInitialSlots = 1 << 12;
+// Cell coordinates are packed into 21 bits each (+-1,048,575 cells: +-210 km at 0.2 m); points
+// beyond are not mapped. The bias keeps every packed key non-zero, so 0 marks an empty slot.
+constexpr std::int64_t kCoordBias = 1 << 20;
+constexpr std::int64_t kCoordLimit = (1 << 21) - 1;
+
+std::uint64_t mix(std::uint64_t k) {
+  // splitmix64 finaliser: spreads lattice keys over the table.
+  k ^= k >> 30;
+  k *= 0xbf58476d1ce4e5b9ULL;
+  k ^= k >> 27;
+  k *= 0x94d049bb133111ebULL;
+  k ^= k >> 31;
+  return k;
+}
+
+}  // namespace
+
+MapAccumulator::MapAccumulator(double cell_size_m, std::size_t max_points)
+    : inv_cell_(1.0 / cell_size_m), max_points_(max_points) {
+  if (!(cell_size_m > 0.0) || max_points == 0) {
+    throw std::invalid_argument("map cell size must be > 0 and the point budget > 0");
+  }
+  table_.assign(kInitialSlots, 0);
+}
+
+bool MapAccumulator::add(const Eigen::Vector3d& p) {
+  std::uint64_t key = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double c = std::floor(p[axis] * inv_cell_);
+    if (!(std::abs(c) < static_cast<double>(kCoordBias))) return false;  // also NaN
+    const auto biased = static_cast<std::int64_t>(c) + kCoordBias;
+    if (biased <= 0 || biased > kCoordLimit) return false;
+    key = (key << 21) | static_cast<std::uint64_t>(biased);
+  }
+  const std::size_t mask = table_.size() - 1;
+  std::size_t slot = mix(key) & mask;
+  while (table_[slot] != 0) {
+    if (table_[slot] == key) return false;
+    slot = (slot + 1) & mask;
+  }
+  if (size() >= max_points_) {
+    ++dropped_full_;
+    return false;
+  }
+  table_[slot] = key;
+  xyz_.push_back(static_cast<float>(p.x()));
+  xyz_.push_back(static_cast<float>(p.y()));
+  xyz_.push_back(static_cast<float>(p.z()));
+  if (2 * size() > table_.size()) grow();
+  return true;
+}
+
+void MapAccumulator::grow() {
+  std::vector<std::uint64_t> old;
+  old.swap(table_);
+  table_.assign(old.size() * 2, 0);
+  const std::size_t mask = table_.size() - 1;
+  for (const std::uint64_t key : old) {
+    if (key == 0) continue;
+    std::size_t slot = mix(key) & mask;
+    while (table_[slot] != 0) slot = (slot + 1) & mask;
+    table_[slot] = key;
+  }
+}
+
+std::size_t MapAccumulator::bytes() const {
+  return xyz_.capacity() * sizeof(float) + table_.capacity() * sizeof(std::uint64_t);
+}
+
+void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
+  const std::size_t n = xyz.size() / 3;
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw Error("cannot create " + path.string());
+  out << "# .PCD v0.7 - Point Cloud Data file format\n"
+      << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+      << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
+  // PCD binary data is the points' memory layout: little-endian float32 on every host livod
+  // runs on.
+  out.write(reinterpret_cast<const char*>(xyz.data()),
+            static_cast<std::streamsize>(n * 3 * sizeof(float)));
+  out.flush();
+  if (!out) throw Error("cannot write " + path.string());
+}
+
+}  // namespace livod::daemon::replay

@@ -1,0 +1,48 @@
+#pragma once
+// The exported map (OUTDIR/map.pcd): the registered, downsampled points of every frame through a
+// voxel filter that keeps the first point to land in each cell, up to a point budget. Keeping the
+// first point (not a running centroid) makes the output independent of later frames and costs one
+// hash probe per point; the cell size bounds the density, the budget bounds memory for
+// recordings that never revisit a place (a street): once full, points in new cells are counted
+// and dropped.
+//
+// Memory: 12 bytes per kept point plus an open-addressing table of 8-byte cell keys kept at most
+// half full, grown by doubling: at most 12 + 4 x 8 = 44 bytes per point of the budget.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace livod::daemon::replay {
+
+class MapAccumulator {
+ public:
+  // Throws std::invalid_argument for a cell size <= 0 or a zero budget.
+  MapAccumulator(double cell_size_m, std::size_t max_points);
+
+  // Adds one world point; returns false when its cell was already taken or the budget is spent.
+  bool add(const Eigen::Vector3d& p_world);
+
+  [[nodiscard]] std::size_t size() const { return xyz_.size() / 3; }
+  [[nodiscard]] std::uint64_t dropped_full() const { return dropped_full_; }
+  // Heap bytes held (point storage + table capacity).
+  [[nodiscard]] std::size_t bytes() const;
+  [[nodiscard]] const std::vector<float>& xyz() const { return xyz_; }
+
+ private:
+  void grow();
+
+  double inv_cell_;
+  std::size_t max_points_;
+  std::vector<float> xyz_;
+  std::vector<std::uint64_t> table_;  // 0 = empty slot; keys are never 0 (see the .cpp)
+  std::uint64_t dropped_full_ = 0;
+};
+
+// Writes x y z float32 points as a binary PCD v0.7 file (the header PCL and CloudCompare read).
+// Throws livod::Error if the file cannot be written.
+void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz);
+
+}  // namespace livod::daemon::replay

@@ -1,0 +1,36 @@
+#include "daemon/replay/sources.hpp"
+
+#include "core/error.hpp"
+#include "daemon/replay/decoder_factory.hpp"
+#include "daemon/replay/source_kinds.hpp"
+
+namespace livod::daemon::replay {
+
+std::unique_ptr<ReplaySource> make_source(const SensorConfig& sensor,
+                                          const ReplaySourceConfig& replay,
+                                          const std::vector<std::uint16_t>& ports) {
+  const std::string what =
+      "sensor '" + sensor.name + "' (" + std::string(enum_name(sensor.driver)) + ") from " +
+      std::string(enum_name(replay.format)) + " '" + replay.file.string() + "'";
+  try {
+    switch (replay.format) {
+      case ReplayFormat::pcap:
+        if (!is_packet_lidar(sensor.driver)) break;
+        return make_pcap_source(replay.file, make_lidar_decoder(sensor), ports);
+      case ReplayFormat::candump:
+        if (sensor.driver != Driver::can_imu) break;
+        return make_candump_source(replay.file, sensor.can, sensor.name);
+      case ReplayFormat::rosbag1:
+        return make_bag_source(
+            replay.file, replay.topic, sensor,
+            is_packet_lidar(sensor.driver) ? make_lidar_decoder(sensor) : nullptr);
+      case ReplayFormat::euroc:
+        break;
+    }
+  } catch (const Error& e) {
+    throw Error(what + ": " + e.what());
+  }
+  throw Error(what + ": this driver cannot be replayed from this format");
+}
+
+}  // namespace livod::daemon::replay
