@@ -7,7 +7,7 @@
 #                                              time (needs ~3 GB in $TMPDIR for the capture)
 #
 # BUILD_DIR defaults to build/release (a Release build: -O2, no -ffast-math, no -march=native).
-# Per-frame figures are thread CPU time (unaffected by other processes) and wall time; run on an
+# Per-frame figures are wall time and CPU time over all threads (unaffected by other processes); run on an
 # otherwise idle machine for wall figures that mean something.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -89,6 +89,9 @@ struct VioParams {
 };
 
 struct EstimatorParams {
+  // Threads for residual rows and map refits (FAST-LIVO2 uses up to 4 OpenMP threads); 0: one per
+  // core. The trajectory does not depend on it.
+  int threads = 0;
   ImuParams imu;
   LioParams lio;
   MapParams map;

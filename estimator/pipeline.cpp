@@ -32,73 +32,71 @@ PointNoise point_noise(const LioParams& lio) {
 LioPipeline::LioPipeline(PipelineOptions options)
     : options_(std::move(options)),
       initializer_(options_.params.imu),
+      sync_(SyncParams{options_.max_queued_scans, options_.max_queued_imu}),
       map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
       downsampler_(options_.params.lio.filter_size_surf) {
-  p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.threads);
+  p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.runner);
 }
 
 LioPipeline::~LioPipeline() = default;
 
+void LioPipeline::for_points(std::size_t n,
+                             const std::function<void(std::size_t, std::size_t)>& fn) const {
+  if (options_.runner != nullptr) {
+    parallel_for(*options_.runner, n, 1024, fn);
+  } else {
+    fn(0, n);
+  }
+}
+
 void LioPipeline::add_imu(const ImuSample& sample) {
-  ++counters_.imu_in;
-  const MappedTime last = !imu_.empty()    ? imu_.back().stamp.mapped
-                          : have_prev_imu_ ? prev_imu_.stamp.mapped
-                                           : MappedTime(std::numeric_limits<std::int64_t>::min());
-  if (sample.stamp.mapped <= last) {
-    ++counters_.imu_out_of_order;
+  if (initializer_.done()) {
+    sync_.add_imu(sample);
     return;
   }
-  if (!initializer_.done()) {
-    if (initializer_.add(sample)) {
-      belief_ = *initializer_.result();
-      state_time_ = initializer_.time();
-      prev_imu_ = sample;
-      have_prev_imu_ = true;
-    }
+  ++init_counters_.imu_in;
+  if (have_prev_imu_ && sample.stamp.mapped <= prev_imu_.stamp.mapped) {
+    ++init_counters_.imu_out_of_order;
     return;
   }
-  imu_.push_back(sample);
-  if (imu_.size() > options_.max_queued_imu) {
-    imu_.pop_front();
-    ++counters_.imu_queue_overflow;
+  prev_imu_ = sample;
+  have_prev_imu_ = true;
+  if (initializer_.add(sample)) {
+    belief_ = *initializer_.result();
+    state_time_ = initializer_.time();
+    sync_.start(state_time_);
   }
 }
 
 void LioPipeline::add_scan(const LidarScan& scan) {
-  ++counters_.scans_in;
-  if (scan.empty()) return;
-  std::int32_t last = 0;
-  for (const auto t : scan.t_offset_ns) last = std::max(last, t);
-  const MappedTime end = scan.start.mapped + Nanoseconds(last);
-  if (!initializer_.done() || end <= state_time_) {
-    if (!initializer_.done())
-      ++counters_.scans_before_init;
-    else
-      ++counters_.scans_out_of_order;
+  if (initializer_.done()) {
+    sync_.add_scan(scan);
     return;
   }
-  if (!scans_.empty() && end <= scans_.back().end) {
-    ++counters_.scans_out_of_order;
-    return;
-  }
-  scans_.push_back(QueuedScan{scan, end});
-  if (scans_.size() > options_.max_queued_scans) {
-    scans_.pop_front();
-    ++counters_.scans_queue_overflow;
-  }
+  ++init_counters_.scans_in;
+  if (!scan.empty()) ++counters_.scans_before_init;
+}
+
+PipelineCounters LioPipeline::counters() const {
+  PipelineCounters c = counters_;
+  const SyncCounters& s = sync_.counters();
+  c.scans_in = init_counters_.scans_in + s.scans_in;
+  c.scans_out_of_order = s.scans_out_of_order;
+  c.scans_queue_overflow = s.scans_queue_overflow;
+  c.imu_in = init_counters_.imu_in + s.imu_in;
+  c.imu_out_of_order = init_counters_.imu_out_of_order + s.imu_out_of_order;
+  c.imu_queue_overflow = s.imu_queue_overflow;
+  return c;
 }
 
 void LioPipeline::process(const std::function<void(const PipelineOutput&)>& on_output) {
-  while (!scans_.empty() && !imu_.empty() && imu_.back().stamp.mapped >= scans_.front().end) {
-    const QueuedScan q = std::move(scans_.front());
-    scans_.pop_front();
-    process_scan(q, on_output);
-  }
+  while (sync_.next(group_)) process_group(group_, on_output);
 }
 
-void LioPipeline::propagate_to(MappedTime t_end, ImuPoseTrack& track) {
+void LioPipeline::propagate_to(const MeasurementGroup& group, ImuPoseTrack& track) {
   const auto& ip = options_.params.imu;
   const double inv_expo_cov = options_.params.vio.inv_expo_cov;
+  const MappedTime t_end = group.t_update;
   track.clear();
   auto push_pose = [&](const ImuReading& m) {
     ImuPose pose;
@@ -111,9 +109,7 @@ void LioPipeline::propagate_to(MappedTime t_end, ImuPoseTrack& track) {
         belief_.x.R_world_imu * (m.accel_m_s2 - belief_.x.bias_accel) + belief_.x.gravity_world;
     track.push(pose);
   };
-  while (!imu_.empty() && imu_.front().stamp.mapped <= t_end) {
-    const ImuSample s = imu_.front();
-    imu_.pop_front();
+  for (const ImuSample& s : group.imu) {
     const double dt = to_seconds(s.stamp.mapped - state_time_);
     if (dt <= 0.0) {
       prev_imu_ = s;
@@ -126,12 +122,12 @@ void LioPipeline::propagate_to(MappedTime t_end, ImuPoseTrack& track) {
     state_time_ = s.stamp.mapped;
     prev_imu_ = s;
   }
-  // The last interval is cut at the scan end, interpolating the next sample to that time.
+  // The last interval is cut at the update time, interpolating the next sample to that time.
   const double dt = to_seconds(t_end - state_time_);
   if (dt > 0.0) {
     ImuReading m{prev_imu_.gyro_rad_s, prev_imu_.accel_m_s2};
-    if (!imu_.empty()) {
-      const ImuSample& next = imu_.front();
+    if (group.imu_after) {
+      const ImuSample& next = *group.imu_after;
       const double span = to_seconds(next.stamp.mapped - prev_imu_.stamp.mapped);
       const double a = span > 0.0 ? to_seconds(t_end - prev_imu_.stamp.mapped) / span : 0.0;
       const Eigen::Vector3d g_end =
@@ -153,17 +149,18 @@ void LioPipeline::propagate_to(MappedTime t_end, ImuPoseTrack& track) {
   push_pose(ImuReading{prev_imu_.gyro_rad_s, prev_imu_.accel_m_s2});
 }
 
-void LioPipeline::process_scan(const QueuedScan& q,
-                               const std::function<void(const PipelineOutput&)>& on_output) {
+void LioPipeline::process_group(const MeasurementGroup& group,
+                                const std::function<void(const PipelineOutput&)>& on_output) {
   const auto t_total = std::chrono::steady_clock::now();
   const auto& lio = options_.params.lio;
   FrameReport report;
-  report.t = q.end;
-  report.scan_sequence = q.scan.sequence;
-  report.raw_points = static_cast<int>(q.scan.size());
+  const LidarScan& scan = group.scan;
+  report.t = group.t_update;
+  report.scan_sequence = scan.sequence;
+  report.raw_points = static_cast<int>(scan.size());
 
   auto t0 = std::chrono::steady_clock::now();
-  propagate_to(q.end, track_);
+  propagate_to(group, track_);
   report.timings.propagate_ms = ms_since(t0);
 
   // Select points: valid, beyond the blind range, every point_filter_num-th.
@@ -172,26 +169,29 @@ void LioPipeline::process_scan(const QueuedScan& q,
   const double blind2 = lio.blind * lio.blind;
   const int stride = std::max(1, lio.point_filter_num);
   int k = 0;
-  for (std::uint32_t i = 0; i < q.scan.size(); ++i) {
-    if (!q.scan.valid[i]) continue;
+  for (std::uint32_t i = 0; i < scan.size(); ++i) {
+    if (!scan.valid[i]) continue;
     if (k++ % stride != 0) continue;
-    if (q.scan.point(i).cast<double>().squaredNorm() < blind2) continue;
+    if (scan.point(i).cast<double>().squaredNorm() < blind2) continue;
     indices_.push_back(i);
   }
-  undistort_points(track_, options_.T_imu_lidar, q.end, q.scan, indices_, undistorted_);
+  undistort_points(track_, options_.T_imu_lidar, group.t_update, scan, indices_, undistorted_);
   report.timings.undistort_ms = ms_since(t0);
 
   t0 = std::chrono::steady_clock::now();
   downsampler_.apply(undistorted_);
+  spatial_order_.apply(undistorted_, lio.voxel_size);
   report.timings.downsample_ms = ms_since(t0);
   report.used_points = static_cast<int>(undistorted_.size());
 
   const PointNoise noise = point_noise(lio);
   scan_points_.resize(undistorted_.size());
-  for (std::size_t i = 0; i < undistorted_.size(); ++i) {
-    scan_points_[i].p_lidar = undistorted_[i];
-    scan_points_[i].cov_lidar = point_covariance(undistorted_[i], noise);
-  }
+  for_points(undistorted_.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      scan_points_[i].p_lidar = undistorted_[i];
+      scan_points_[i].cov_lidar = point_covariance(undistorted_[i], noise);
+    }
+  });
 
   t0 = std::chrono::steady_clock::now();
   if (!map_->empty()) {
@@ -220,14 +220,16 @@ void LioPipeline::process_scan(const QueuedScan& q,
   const Eigen::Matrix3d P_rot = belief_.P.block<3, 3>(kRot, kRot);
   const Eigen::Matrix3d P_pos = belief_.P.block<3, 3>(kPos, kPos);
   world_points_.resize(scan_points_.size());
-  for (std::size_t i = 0; i < scan_points_.size(); ++i) {
-    const Eigen::Vector3d p_i = options_.T_imu_lidar * scan_points_[i].p_lidar;
-    const Eigen::Matrix3d J_rot = -R * so3::hat(p_i);
-    world_points_[i].p = R * p_i + belief_.x.p_world_imu;
-    world_points_[i].cov = R_wl * scan_points_[i].cov_lidar * R_wl.transpose() +
-                           J_rot * P_rot * J_rot.transpose() + P_pos;
-  }
-  map_->insert(world_points_);
+  for_points(scan_points_.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3d p_i = options_.T_imu_lidar * scan_points_[i].p_lidar;
+      const Eigen::Matrix3d J_rot = -R * so3::hat(p_i);
+      world_points_[i].p = R * p_i + belief_.x.p_world_imu;
+      world_points_[i].cov = R_wl * scan_points_[i].cov_lidar * R_wl.transpose() +
+                             J_rot * P_rot * J_rot.transpose() + P_pos;
+    }
+  });
+  map_->insert(world_points_, options_.runner);
   map_->slide(belief_.x.p_world_imu);
   report.timings.map_ms = ms_since(t0);
   // A full map traversal costs as much as a large part of the frame on a big (street) map:
@@ -237,7 +239,7 @@ void LioPipeline::process_scan(const QueuedScan& q,
   report.timings.total_ms = ms_since(t_total);
   ++counters_.scans_processed;
 
-  if (on_output) on_output(PipelineOutput{q.end, belief_.x, belief_.P, report});
+  if (on_output) on_output(PipelineOutput{group.t_update, belief_.x, belief_.P, report});
 }
 
 }  // namespace livod::estimator

@@ -9,7 +9,6 @@
 // time can become the update time later (scan recombination) without changing the filter.
 
 #include <Eigen/Geometry>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <string>
@@ -20,15 +19,21 @@
 #include "estimator/imu/undistortion.hpp"
 #include "estimator/lio/downsample.hpp"
 #include "estimator/lio/point_to_plane.hpp"
+#include "estimator/lio/spatial_order.hpp"
 #include "estimator/map/voxel_map.hpp"
 #include "estimator/params.hpp"
+#include "estimator/sync/measurement_sync.hpp"
+#include "estimator/task_runner.hpp"
 
 namespace livod::estimator {
 
 struct PipelineOptions {
   EstimatorParams params;
   Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();
-  int threads = 2;                 // residual building
+  // Runs residual rows, point covariances and map refits in parallel (the daemon's worker pool);
+  // nullptr: everything on the caller's thread. Results are the same either way. Must outlive the
+  // pipeline.
+  TaskRunner* runner = nullptr;
   int min_matches = 30;            // fewer matched points: keep the propagated state
   double degeneracy_ratio = 0.02;  // translation information ratio below which a frame is flagged
   std::size_t max_queued_scans = 20;  // bounded input queues (oldest dropped, counted)
@@ -90,7 +95,7 @@ class LioPipeline {
 
   [[nodiscard]] bool initialised() const { return initializer_.done(); }
   [[nodiscard]] const std::string& init_status() const { return initializer_.status(); }
-  [[nodiscard]] const PipelineCounters& counters() const { return counters_; }
+  [[nodiscard]] PipelineCounters counters() const;
   [[nodiscard]] const VoxelMap& map() const { return *map_; }
   [[nodiscard]] const Belief& belief() const { return belief_; }
   // The points of the scan processed last, as the update used them: undistorted to the scan end
@@ -100,25 +105,32 @@ class LioPipeline {
   }
 
  private:
-  struct QueuedScan {
-    LidarScan scan;
-    MappedTime end;
-  };
-  void process_scan(const QueuedScan& q, const std::function<void(const PipelineOutput&)>& out);
-  void propagate_to(MappedTime t_end, ImuPoseTrack& track);
+  void process_group(const MeasurementGroup& group,
+                     const std::function<void(const PipelineOutput&)>& on_output);
+  // Propagates the belief through the group's IMU samples to its update time, recording the IMU
+  // poses along the way (for undistortion).
+  void propagate_to(const MeasurementGroup& group, ImuPoseTrack& track);
+  // fn(begin, end) over [0, n), on the runner when there is one.
+  void for_points(std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn) const;
 
   PipelineOptions options_;
   ImuInitializer initializer_;
+  MeasurementSync sync_;
+  MeasurementGroup group_;  // the group being processed (its IMU vector keeps its capacity)
   std::unique_ptr<VoxelMap> map_;
   std::unique_ptr<PointToPlane> p2p_;
   VoxelGridDownsampler downsampler_;
+  SpatialOrder spatial_order_;
   Belief belief_;
   MappedTime state_time_;
   bool have_prev_imu_ = false;
   ImuSample prev_imu_;
-  std::deque<ImuSample> imu_;
-  std::deque<QueuedScan> scans_;
-  PipelineCounters counters_;
+  PipelineCounters counters_;  // the pipeline's own; counters() adds the sync's
+  struct {
+    std::uint64_t scans_in = 0;
+    std::uint64_t imu_in = 0;
+    std::uint64_t imu_out_of_order = 0;
+  } init_counters_;  // input while the IMU initialisation is pending
   ImuPoseTrack track_;
   std::vector<std::uint32_t> indices_;
   std::vector<Eigen::Vector3d> undistorted_;

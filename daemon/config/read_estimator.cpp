@@ -122,6 +122,7 @@ void read_vio(MapReader& m, estimator::VioParams& vio) {
 }  // namespace
 
 void read_estimator(MapReader& reader, estimator::EstimatorParams& params) {
+  reader.read("threads", params.threads, 0, 256);
   {
     MapReader m = reader.map("imu");
     read_imu(m, params.imu);

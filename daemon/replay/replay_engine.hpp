@@ -1,6 +1,7 @@
 #pragma once
-// Offline replay, as fast as possible: single-threaded and deterministic (the same recordings and
-// configuration give byte-identical trajectories).
+// Offline replay, as fast as possible and deterministic (the same recordings and configuration
+// give byte-identical trajectories): one thread reads, decodes and runs the filter; the estimator
+// spreads its residuals and map refits over a worker pool without changing a bit of the result.
 //
 //   recordings ──(one ReplaySource per sensor: pcap / candump / bag topic)──▶ k-way merge on the
 //   recording's receive time (ties: configuration order) ──▶ the sensor's decoder ──▶ its
@@ -35,6 +36,8 @@ struct ReplayOptions {
   std::size_t map_max_points = 2'000'000;  // map.pcd budget (<= 88 MB, map_accumulator.hpp)
   // Stop once this much recording (receive time) has been replayed; <= 0: everything.
   double max_duration_s = 0.0;
+  // Estimator threads; < 0: the configuration's estimator.threads (0 there: one per core).
+  int threads = -1;
 };
 
 struct ReplayResult {

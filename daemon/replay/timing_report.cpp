@@ -102,7 +102,7 @@ std::string format_timing_text(const ReplaySummary& s) {
                      s.init_status);
   out += "\nper-frame estimator time (ms):\n";
   out += text_distribution("total (wall)", s.frame_ms, "ms", 3);
-  out += text_distribution("total (thread CPU)", s.frame_cpu_ms, "ms", 3);
+  out += text_distribution("total (CPU, all threads)", s.frame_cpu_ms, "ms", 3);
   out += text_distribution("propagate", s.propagate_ms, "ms", 3);
   out += text_distribution("undistort", s.undistort_ms, "ms", 3);
   out += text_distribution("downsample", s.downsample_ms, "ms", 3);

@@ -55,7 +55,8 @@ struct ReplaySummary {
   std::string init_status;
   estimator::PipelineCounters counters;
   // Per frame (estimator stages, ms). frame_ms is wall time (what a live system sees, inflated
-  // when other processes take the CPU); frame_cpu_ms is the thread's CPU time for the frame.
+  // when other processes take the CPU); frame_cpu_ms is the CPU time of the frame over all threads
+  // (it exceeds the wall time when the worker pool keeps both cores busy).
   Distribution frame_ms, frame_cpu_ms, propagate_ms, undistort_ms, downsample_ms, update_ms, map_ms;
   // Per frame (counts).
   Distribution raw_points, used_points, matched, iterations;

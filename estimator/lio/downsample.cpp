@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "estimator/grid_index.hpp"
+
 namespace livod::estimator {
 namespace {
 
@@ -38,9 +40,9 @@ void VoxelGridDownsampler::apply(std::vector<Eigen::Vector3d>& points) {
   const std::size_t mask = slots_.size() - 1;
   for (const auto& p : points) {
     // 21 bits per axis (+-1M cells, +-104 km at 0.1 m) packed into one key.
-    const auto ix = static_cast<std::int64_t>(std::floor(p.x() * inv_cell_)) & 0x1FFFFF;
-    const auto iy = static_cast<std::int64_t>(std::floor(p.y() * inv_cell_)) & 0x1FFFFF;
-    const auto iz = static_cast<std::int64_t>(std::floor(p.z() * inv_cell_)) & 0x1FFFFF;
+    const auto ix = floor_to_int(p.x() * inv_cell_) & 0x1FFFFF;
+    const auto iy = floor_to_int(p.y() * inv_cell_) & 0x1FFFFF;
+    const auto iz = floor_to_int(p.z() * inv_cell_) & 0x1FFFFF;
     const std::uint64_t key = (static_cast<std::uint64_t>(ix) << 42) |
                               (static_cast<std::uint64_t>(iy) << 21) |
                               static_cast<std::uint64_t>(iz);

@@ -3,75 +3,92 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <thread>
 
 #include "core/so3.hpp"
 
 namespace livod::estimator {
 
-PlaneRowJacobian point_to_plane_jacobian(const Plane& plane, const Eigen::Vector3d& p_imu,
-                                         const State& x) {
+PlaneRowJacobian point_to_plane_jacobian(const Eigen::Vector3d& n, double d,
+                                         const Eigen::Vector3d& p_imu, const State& x) {
   PlaneRowJacobian r;
-  const Eigen::Vector3d& n = plane.normal;
-  r.h = n.dot(x.R_world_imu * p_imu + x.p_world_imu) + plane.d;
+  r.h = n.dot(x.R_world_imu * p_imu + x.p_world_imu) + d;
   // [p]x R^T n, as a cross product (a 3x3 product per point otherwise).
   r.H.leftCols<3>() = p_imu.cross(x.R_world_imu.transpose() * n).transpose();
   r.H.rightCols<3>() = n.transpose();
   return r;
 }
 
-PointToPlane::PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, int threads)
-    : map_(map), T_imu_lidar_(T_imu_lidar), threads_(std::max(1, threads)) {}
+PointToPlane::PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar,
+                           TaskRunner* runner)
+    : map_(map), T_imu_lidar_(T_imu_lidar), runner_(runner) {}
+
+void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const State& x,
+                                   std::size_t begin, std::size_t end, Block& block) {
+  // Lookups run ahead of the matching: the table slot kSlotAhead points ahead, the node
+  // kNodeAhead points ahead (VoxelMap::prefetch_root / resolve).
+  constexpr std::size_t kSlotAhead = 16;
+  constexpr std::size_t kNodeAhead = 8;
+  const Eigen::Matrix3d& R = x.R_world_imu;
+  const Eigen::Matrix3d R_wl = R * T_imu_lidar_.linear();
+  const Eigen::Vector3d t_wl = R * T_imu_lidar_.translation() + x.p_world_imu;
+  const auto world = [&](std::size_t i) -> Eigen::Vector3d {
+    return R_wl * points[i].p_lidar + t_wl;
+  };
+  block.HtH.setZero();
+  block.Htz.setZero();
+  block.weighted_sq_residual = 0.0;
+  block.abs_residual_sum = 0.0;
+  block.matched = 0;
+  for (std::size_t i = begin; i < std::min(end, begin + kNodeAhead); ++i) {
+    map_.resolve(world(i), hints_[i]);
+  }
+  for (std::size_t i = begin; i < end; ++i) {
+    if (i + kSlotAhead < end && !map_.is_current(hints_[i + kSlotAhead])) {
+      map_.prefetch_root(world(i + kSlotAhead));
+    }
+    if (i + kNodeAhead < end) map_.resolve(world(i + kNodeAhead), hints_[i + kNodeAhead]);
+    const Eigen::Vector3d p_i = T_imu_lidar_ * points[i].p_lidar;
+    const Eigen::Vector3d p_w = R * p_i + x.p_world_imu;
+    const Eigen::Matrix3d cov_w = R_wl * points[i].cov_lidar * R_wl.transpose();
+    PlaneMatch m;
+    if (!map_.match(p_w, cov_w, m, hints_[i])) continue;
+    const PlaneRowJacobian j = point_to_plane_jacobian(m.plane->normal, m.plane->d, p_i, x);
+    const double w = 1.0 / (m.variance + 1e-6);
+    const double z = -j.h;
+    block.HtH.noalias() += w * j.H.transpose() * j.H;
+    block.Htz.noalias() += (w * z) * j.H.transpose();
+    block.weighted_sq_residual += w * z * z;
+    block.abs_residual_sum += std::abs(z);
+    ++block.matched;
+  }
+}
 
 bool PointToPlane::linearize(const std::vector<ScanPoint>& points, const State& x,
                              NormalEquations& eq, int min_matches) {
-  rows_.resize(points.size());
-  hints_.resize(points.size());
-  const Eigen::Matrix3d R = x.R_world_imu;
-  const Eigen::Matrix3d R_wl = R * T_imu_lidar_.linear();
-  auto work = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      Row& row = rows_[i];
-      row.matched = false;
-      const Eigen::Vector3d p_i = T_imu_lidar_ * points[i].p_lidar;
-      const Eigen::Vector3d p_w = R * p_i + x.p_world_imu;
-      const Eigen::Matrix3d cov_w = R_wl * points[i].cov_lidar * R_wl.transpose();
-      PlaneMatch m;
-      if (!map_.match(p_w, cov_w, m, hints_[i])) continue;
-      const PlaneRowJacobian j = point_to_plane_jacobian(*m.plane, p_i, x);
-      row.matched = true;
-      row.H = j.H;
-      row.z = -j.h;
-      row.weight = 1.0 / (m.variance + 1e-6);
-    }
-  };
   const std::size_t n = points.size();
-  if (threads_ <= 1 || n < 2000) {
-    work(0, n);
+  hints_.resize(n);
+  const std::size_t blocks = (n + kBlockPoints - 1) / kBlockPoints;
+  blocks_.resize(blocks);
+  const auto block_task = [&](std::size_t b) {
+    linearize_block(points, x, b * kBlockPoints, std::min(n, (b + 1) * kBlockPoints), blocks_[b]);
+  };
+  if (runner_ != nullptr) {
+    runner_->run(blocks, block_task);
   } else {
-    std::vector<std::thread> pool;
-    const std::size_t chunk =
-        (n + static_cast<std::size_t>(threads_) - 1) / static_cast<std::size_t>(threads_);
-    for (int t = 1; t < threads_; ++t) {
-      const std::size_t b = static_cast<std::size_t>(t) * chunk;
-      pool.emplace_back(work, std::min(b, n), std::min(b + chunk, n));
-    }
-    work(0, std::min(chunk, n));
-    for (auto& th : pool) th.join();
+    for (std::size_t b = 0; b < blocks; ++b) block_task(b);
   }
-  // Deterministic sum in point order.
+  // Deterministic sum in block order.
   Eigen::Matrix<double, 6, 6> HtH = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> Htz = Eigen::Matrix<double, 6, 1>::Zero();
   stats_ = PointToPlaneStats{};
   stats_.points = static_cast<int>(n);
   double abs_sum = 0.0;
-  for (const Row& row : rows_) {
-    if (!row.matched) continue;
-    ++stats_.matched;
-    HtH.noalias() += row.weight * row.H.transpose() * row.H;
-    Htz.noalias() += row.weight * row.H.transpose() * row.z;
-    eq.weighted_sq_residual += row.weight * row.z * row.z;
-    abs_sum += std::abs(row.z);
+  for (const Block& block : blocks_) {
+    HtH += block.HtH;
+    Htz += block.Htz;
+    eq.weighted_sq_residual += block.weighted_sq_residual;
+    abs_sum += block.abs_residual_sum;
+    stats_.matched += block.matched;
   }
   stats_.mean_abs_residual_m = stats_.matched > 0 ? abs_sum / stats_.matched : 0.0;
   eq.HtRinvH.block<6, 6>(kRot, kRot) += HtH;

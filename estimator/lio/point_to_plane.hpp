@@ -7,8 +7,8 @@
 //   H = [ ([p_i]x R^T n)^T , n^T , 0 ... ]     (rotation block, position block)
 //   weight 1 / (var_plane + n^T S_w n),  S_w = R R_il S_l R_il^T R^T   (FAST-LIVO2 defect 8:
 //   it forgets R_il here)
-// Association is redone at every iteration. Residuals are computed in parallel into a per-point
-// array and summed in point order, so the result does not depend on the thread count.
+// Association is redone at every iteration. Residuals are computed in parallel (TaskRunner) into a
+// per-point array and summed in point order, so the result does not depend on the thread count.
 
 #include <Eigen/Geometry>
 #include <vector>
@@ -16,6 +16,7 @@
 #include "estimator/filter/esikf.hpp"
 #include "estimator/map/point_covariance.hpp"
 #include "estimator/map/voxel_map.hpp"
+#include "estimator/task_runner.hpp"
 
 namespace livod::estimator {
 
@@ -24,14 +25,15 @@ struct ScanPoint {
   Eigen::Matrix3d cov_lidar = Eigen::Matrix3d::Zero();
 };
 
-// Prediction h = n^T (R p_imu + t) + d of one point against a plane, and its Jacobian with
+// Prediction h = n^T (R p_imu + t) + d of one point against the plane n^T x + d = 0, and its
+// Jacobian with
 // respect to the (rotation, position) error state.
 struct PlaneRowJacobian {
   double h = 0.0;
   Eigen::Matrix<double, 1, 6> H;
 };
-PlaneRowJacobian point_to_plane_jacobian(const Plane& plane, const Eigen::Vector3d& p_imu,
-                                         const State& x);
+PlaneRowJacobian point_to_plane_jacobian(const Eigen::Vector3d& normal, double d,
+                                         const Eigen::Vector3d& p_imu, const State& x);
 
 struct PointToPlaneStats {
   int points = 0;
@@ -41,7 +43,8 @@ struct PointToPlaneStats {
 
 class PointToPlane {
  public:
-  PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, int threads);
+  // `runner` (nullptr: the caller's thread) must outlive this object.
+  PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, TaskRunner* runner);
 
   // Accumulates the normal equations of every matched point at state x.
   bool linearize(const std::vector<ScanPoint>& points, const State& x, NormalEquations& eq,
@@ -50,17 +53,23 @@ class PointToPlane {
   [[nodiscard]] const PointToPlaneStats& stats() const { return stats_; }
 
  private:
-  struct Row {
-    bool matched = false;
-    Eigen::Matrix<double, 1, 6> H;
-    double z = 0.0;
-    double weight = 0.0;
+  // Normal equations of one block of points. Blocks have a fixed size, are filled in any order
+  // on any thread and summed in block order: the total does not depend on the thread count.
+  struct Block {
+    Eigen::Matrix<double, 6, 6> HtH = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> Htz = Eigen::Matrix<double, 6, 1>::Zero();
+    double weighted_sq_residual = 0.0;
+    double abs_residual_sum = 0.0;
+    int matched = 0;
   };
+  static constexpr std::size_t kBlockPoints = 512;
+  void linearize_block(const std::vector<ScanPoint>& points, const State& x, std::size_t begin,
+                       std::size_t end, Block& block);
 
   const VoxelMap& map_;
   Eigen::Isometry3d T_imu_lidar_;
-  int threads_;
-  std::vector<Row> rows_;
+  TaskRunner* runner_;
+  std::vector<Block> blocks_;
   std::vector<VoxelMap::Hint> hints_;  // per point, reused over the iterations of one update
   PointToPlaneStats stats_;
 };

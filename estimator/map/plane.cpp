@@ -106,3 +106,34 @@ PlaneResidual plane_residual(const Plane& plane, const Eigen::Vector3d& p,
 }
 
 }  // namespace livod::estimator
+
+namespace livod::estimator {
+
+MapPlane map_plane(const Plane& plane) {
+  MapPlane m;
+  m.is_plane = plane.is_plane;
+  m.normal = plane.normal;
+  m.d = plane.d;
+  m.center = plane.center;
+  m.extent2 = 9.0 * plane.radius * plane.radius;
+  const auto C = plane.cov.topLeftCorner<3, 3>();
+  m.cov_nn = {C(0, 0), C(1, 1), C(2, 2), C(0, 1), C(0, 2), C(1, 2)};
+  m.cov_nq_n = plane.cov.topRightCorner<3, 3>() * plane.normal;
+  m.n_cov_qq_n = plane.normal.dot(plane.cov.bottomRightCorner<3, 3>() * plane.normal);
+  return m;
+}
+
+PlaneResidual plane_residual(const MapPlane& plane, const Eigen::Vector3d& p,
+                             const Eigen::Matrix3d& point_cov) {
+  PlaneResidual r;
+  const Eigen::Vector3d& n = plane.normal;
+  r.distance = n.dot(p) + plane.d;
+  const Eigen::Vector3d e = p - plane.center;
+  const auto& c = plane.cov_nn;
+  const double e_cnn_e = c[0] * e.x() * e.x() + c[1] * e.y() * e.y() + c[2] * e.z() * e.z() +
+                         2.0 * (c[3] * e.x() * e.y() + c[4] * e.x() * e.z() + c[5] * e.y() * e.z());
+  r.variance = e_cnn_e - 2.0 * e.dot(plane.cov_nq_n) + plane.n_cov_qq_n + n.dot(point_cov * n);
+  return r;
+}
+
+}  // namespace livod::estimator

@@ -1,13 +1,14 @@
 #include "estimator/map/voxel_map.hpp"
 
+#include "estimator/grid_index.hpp"
+
 #include <cmath>
 
 namespace livod::estimator {
 
 VoxelKey voxel_key(const Eigen::Vector3d& p, double voxel_size) {
-  return VoxelKey{static_cast<std::int64_t>(std::floor(p.x() / voxel_size)),
-                  static_cast<std::int64_t>(std::floor(p.y() / voxel_size)),
-                  static_cast<std::int64_t>(std::floor(p.z() / voxel_size))};
+  return VoxelKey{floor_to_int(p.x() / voxel_size), floor_to_int(p.y() / voxel_size),
+                  floor_to_int(p.z() / voxel_size)};
 }
 
 struct VoxelMap::Node {
@@ -17,11 +18,12 @@ struct VoxelMap::Node {
   bool frozen = false;
   int layer = 0;
   int new_points = 0;  // since the last fit
+  MapPlane plane;
   std::array<std::unique_ptr<Node>, 8> children;
-  Plane plane;
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // of the node's cube
   double half = 0.0;                                 // half edge of the cube
   std::vector<CovPoint> points;                      // kept until the node freezes
+  std::uint32_t batch = kNoBatch;                    // roots: index in the insert() under way
 
   int octant(const Eigen::Vector3d& p) const {
     return (p.x() >= center.x() ? 1 : 0) | (p.y() >= center.y() ? 2 : 0) |
@@ -56,7 +58,7 @@ struct VoxelMap::Node {
   }
 
   void fit(const LioParams& lio) {
-    plane = fit_plane(points, lio.min_eigen_value);
+    plane = map_plane(fit_plane(points, lio.min_eigen_value));
     new_points = 0;
   }
 
@@ -100,7 +102,7 @@ struct VoxelMap::Node {
       // costs a 6x6 quadratic form. Gates compare squares (no square roots).
       const double distance = plane.normal.dot(p) + plane.d;
       const double along = (p - plane.center).squaredNorm() - distance * distance;
-      if (std::max(0.0, along) > 9.0 * plane.radius * plane.radius) return;
+      if (along > plane.extent2) return;
       const PlaneResidual r = plane_residual(plane, p, cov);
       if (!(r.variance > 0.0) || r.distance * r.distance >= sigma_num * sigma_num * r.variance) {
         return;
@@ -138,16 +140,23 @@ VoxelMap::~VoxelMap() = default;
 VoxelMap::VoxelMap(VoxelMap&&) noexcept = default;
 VoxelMap& VoxelMap::operator=(VoxelMap&&) noexcept = default;
 
-void VoxelMap::insert(const std::vector<CovPoint>& points) {
+void VoxelMap::insert(const std::vector<CovPoint>& points, TaskRunner* runner) {
   ++generation_;
+  // Voxels dropped by a slide are freed a batch per scan: freeing tens of thousands of subtrees
+  // at once was the largest per-frame spike on a drive.
+  const std::size_t retire = std::min(retired_.size(), kRetiredPerInsert);
+  for (std::size_t i = 0; i < retire; ++i) retired_.pop_back();
   const double vs = lio_.voxel_size;
-  // Consecutive points of a scan often share a voxel: reuse the last lookup.
+  // 1. Bucket the points by root voxel (creating roots), roots numbered in order of first touch.
+  //    Consecutive points of a scan often share a voxel: the last lookup is reused.
+  batch_roots_.clear();
+  point_batch_.resize(points.size());
   VoxelKey last_key;
-  Node* last = nullptr;
-  for (const auto& p : points) {
-    const VoxelKey key = voxel_key(p.p, vs);
-    if (last != nullptr && key == last_key) {
-      last->insert(p, lio_);
+  std::uint32_t last_batch = kNoBatch;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const VoxelKey key = voxel_key(points[i].p, vs);
+    if (last_batch != kNoBatch && key == last_key) {
+      point_batch_[i] = last_batch;
       continue;
     }
     auto& root = roots_[key];
@@ -158,9 +167,36 @@ void VoxelMap::insert(const std::vector<CovPoint>& points) {
                                      (static_cast<double>(key.y) + 0.5) * vs,
                                      (static_cast<double>(key.z) + 0.5) * vs);
     }
-    root->insert(p, lio_);
+    if (root->batch == kNoBatch) {
+      root->batch = static_cast<std::uint32_t>(batch_roots_.size());
+      batch_roots_.push_back(root.get());
+    }
+    point_batch_[i] = root->batch;
     last_key = key;
-    last = root.get();
+    last_batch = root->batch;
+  }
+  // 2. Points grouped per root, in scan order within each root (a stable counting sort).
+  batch_offsets_.assign(batch_roots_.size() + 1, 0);
+  for (const std::uint32_t b : point_batch_) ++batch_offsets_[b + 1];
+  for (std::size_t b = 0; b < batch_roots_.size(); ++b) batch_offsets_[b + 1] += batch_offsets_[b];
+  batch_order_.resize(points.size());
+  batch_cursor_.assign(batch_offsets_.begin(), batch_offsets_.end() - 1);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    batch_order_[batch_cursor_[point_batch_[i]]++] = static_cast<std::uint32_t>(i);
+  }
+  // 3. Each root's octree takes its points: roots are independent, so they are updated in
+  //    parallel, and each sees its points in the same order whatever the thread count.
+  const auto update_root = [&](std::size_t b) {
+    Node* root = batch_roots_[b];
+    for (std::uint32_t k = batch_offsets_[b]; k < batch_offsets_[b + 1]; ++k) {
+      root->insert(points[batch_order_[k]], lio_);
+    }
+    root->batch = kNoBatch;
+  };
+  if (runner != nullptr) {
+    runner->run(batch_roots_.size(), update_root);
+  } else {
+    for (std::size_t b = 0; b < batch_roots_.size(); ++b) update_root(b);
   }
 }
 
@@ -198,6 +234,24 @@ bool VoxelMap::match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, Plane
   return true;
 }
 
+void VoxelMap::prefetch_root(const Eigen::Vector3d& p) const {
+  roots_.prefetch(voxel_key(p, lio_.voxel_size));
+}
+
+void VoxelMap::resolve(const Eigen::Vector3d& p, Hint& hint) const {
+  const VoxelKey key = voxel_key(p, lio_.voxel_size);
+  if (hint.generation != generation_ || !(hint.key == key)) {
+    hint = Hint{key, roots_.find(key), generation_};
+  }
+  if (hint.root != nullptr) {
+    // The node's flags and plane: the first three cache lines of the node.
+    const char* base = reinterpret_cast<const char*>(hint.root);
+    __builtin_prefetch(base);
+    __builtin_prefetch(base + 64);
+    __builtin_prefetch(base + 128);
+  }
+}
+
 std::size_t VoxelMap::slide(const Eigen::Vector3d& position) {
   if (!map_.sliding) return 0;
   if (slid_once_ && (position - last_slide_position_).norm() < map_.slide_threshold_m) return 0;
@@ -206,10 +260,12 @@ std::size_t VoxelMap::slide(const Eigen::Vector3d& position) {
   const double vs = lio_.voxel_size;
   const VoxelKey c = voxel_key(position, vs);
   const auto reach = static_cast<std::int64_t>(std::ceil(map_.half_extent_m / vs));
-  const std::size_t removed = roots_.erase_if([&](const VoxelKey& k) {
-    return std::abs(k.x - c.x) > reach || std::abs(k.y - c.y) > reach ||
-           std::abs(k.z - c.z) > reach;
-  });
+  const std::size_t removed = roots_.erase_if(
+      [&](const VoxelKey& k) {
+        return std::abs(k.x - c.x) > reach || std::abs(k.y - c.y) > reach ||
+               std::abs(k.z - c.z) > reach;
+      },
+      retired_);
   removed_ += removed;
   if (removed > 0) ++generation_;
   return removed;
@@ -220,6 +276,11 @@ VoxelMapStats VoxelMap::stats() const {
   s.root_voxels = roots_.size();
   s.bytes = roots_.bytes();
   roots_.for_each([&s](const Node& node) { node.accumulate(s); });
+  // Dropped voxels not freed yet still hold memory (counted, not reported as map content).
+  VoxelMapStats retired;
+  for (const auto& node : retired_) node->accumulate(retired);
+  s.bytes += retired.bytes + retired_.capacity() * sizeof(std::unique_ptr<Node>);
+  s.retired_voxels = retired_.size();
   s.removed_voxels = removed_;
   return s;
 }
@@ -250,6 +311,10 @@ VoxelMap::Node* VoxelMap::RootTable::find(const VoxelKey& key) const {
   }
 }
 
+void VoxelMap::RootTable::prefetch(const VoxelKey& key) const {
+  __builtin_prefetch(&entries_[VoxelKeyHash{}(key) & (entries_.size() - 1)]);
+}
+
 std::unique_ptr<VoxelMap::Node>& VoxelMap::RootTable::operator[](const VoxelKey& key) {
   if (2 * (size_ + 1) > entries_.size()) rehash(2 * entries_.size());
   const std::size_t mask = entries_.size() - 1;
@@ -278,18 +343,32 @@ void VoxelMap::RootTable::rehash(std::size_t slots) {
   }
 }
 
-std::size_t VoxelMap::RootTable::erase_if(const std::function<bool(const VoxelKey&)>& remove) {
-  std::size_t removed = 0;
-  for (auto& e : entries_) {
-    if (e.node && remove(e.key)) {
-      e.node.reset();
-      ++removed;
+std::size_t VoxelMap::RootTable::erase_if(const std::function<bool(const VoxelKey&)>& remove,
+                                          std::vector<std::unique_ptr<Node>>& removed) {
+  std::vector<VoxelKey> keys;
+  for (const auto& e : entries_) {
+    if (e.node && remove(e.key)) keys.push_back(e.key);
+  }
+  const std::size_t mask = entries_.size() - 1;
+  for (const VoxelKey& key : keys) {
+    std::size_t i = VoxelKeyHash{}(key)&mask;
+    while (!(entries_[i].node && entries_[i].key == key)) i = (i + 1) & mask;  // collected above
+    removed.push_back(std::move(entries_[i].node));
+    --size_;
+    // Backward-shift deletion: linear probing must not leave a hole inside a probe run, so the
+    // entries after it that may live at or before the hole move back (no tombstones, no rehash).
+    std::size_t hole = i;
+    for (std::size_t j = (i + 1) & mask; entries_[j].node; j = (j + 1) & mask) {
+      const std::size_t home = VoxelKeyHash{}(entries_[j].key) & mask;
+      // Entry j may move into the hole unless its home lies cyclically in (hole, j].
+      const bool home_after_hole =
+          hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+      if (home_after_hole) continue;
+      entries_[hole] = std::move(entries_[j]);
+      hole = j;
     }
   }
-  // Linear probing cannot leave holes inside probe runs: rebuild (slides are rare, every
-  // slide_threshold metres).
-  if (removed > 0) rehash(entries_.size());
-  return removed;
+  return keys.size();
 }
 
 void VoxelMap::RootTable::for_each(const std::function<void(const Node&)>& visit) const {

@@ -15,6 +15,7 @@
 
 #include "estimator/map/plane.hpp"
 #include "estimator/params.hpp"
+#include "estimator/task_runner.hpp"
 
 namespace livod::estimator {
 
@@ -40,7 +41,7 @@ struct VoxelKeyHash {
 VoxelKey voxel_key(const Eigen::Vector3d& p, double voxel_size);
 
 struct PlaneMatch {
-  const Plane* plane = nullptr;
+  const MapPlane* plane = nullptr;
   double distance = 0.0;  // signed point-to-plane distance (m)
   double variance = 0.0;  // its variance: plane + point uncertainty (m^2)
 };
@@ -53,6 +54,7 @@ struct VoxelMapStats {
   std::size_t stored_points = 0;
   std::size_t bytes = 0;             // nodes + point storage (capacity), an estimate of heap use
   std::uint64_t removed_voxels = 0;  // dropped by sliding, since construction
+  std::size_t retired_voxels = 0;    // dropped but not freed yet (freed over the next scans)
 };
 
 class VoxelMap {
@@ -62,8 +64,9 @@ class VoxelMap {
   VoxelMap(VoxelMap&&) noexcept;
   VoxelMap& operator=(VoxelMap&&) noexcept;
 
-  // Adds world points (with world covariances) and updates the planes they touch.
-  void insert(const std::vector<CovPoint>& points);
+  // Adds world points (with world covariances) and updates the planes they touch, one root voxel
+  // per task on `runner` (nullptr: on the caller). The result does not depend on the runner.
+  void insert(const std::vector<CovPoint>& points, TaskRunner* runner = nullptr);
 
   // The most likely plane for a world point, passing the in-plane extent gate (3 radii) and the
   // sigma_num gate on the distance; looks into the neighbouring voxel nearest the point when the
@@ -82,6 +85,15 @@ class VoxelMap {
   };
   bool match(const Eigen::Vector3d& p_world, const Eigen::Matrix3d& cov_world, PlaneMatch& out,
              Hint& hint) const;
+  // False once the map changed after the hint was made (it will be looked up again).
+  [[nodiscard]] bool is_current(const Hint& hint) const { return hint.generation == generation_; }
+
+  // Latency hiding for a stream of matches, which is bound by cache misses (the voxel table, then
+  // the voxel's node): prefetch_root() asks for the table slot of a point's voxel some points
+  // ahead; resolve(), a few points later, looks the voxel up (its slot now cached), keeps it in
+  // the hint and asks for the node; match() with that hint then finds both in cache.
+  void prefetch_root(const Eigen::Vector3d& p_world) const;
+  void resolve(const Eigen::Vector3d& p_world, Hint& hint) const;
 
   // Drops root voxels farther than half_extent (per axis) from `position` once the sensor has
   // moved slide_threshold since the last slide. Returns the number of voxels removed.
@@ -103,10 +115,12 @@ class VoxelMap {
     RootTable(RootTable&&) noexcept;
     RootTable& operator=(RootTable&&) noexcept;
     [[nodiscard]] Node* find(const VoxelKey& key) const;
+    void prefetch(const VoxelKey& key) const;
     // The entry of `key`, created empty (nullptr) when absent; the caller fills it.
     std::unique_ptr<Node>& operator[](const VoxelKey& key);
-    // Removes the roots whose key satisfies `remove`; returns how many.
-    std::size_t erase_if(const std::function<bool(const VoxelKey&)>& remove);
+    // Moves the roots whose key satisfies `remove` to `removed`; returns how many.
+    std::size_t erase_if(const std::function<bool(const VoxelKey&)>& remove,
+                         std::vector<std::unique_ptr<Node>>& removed);
     void for_each(const std::function<void(const Node&)>& visit) const;
     [[nodiscard]] std::size_t size() const { return size_; }
     [[nodiscard]] std::size_t bytes() const;
@@ -124,7 +138,17 @@ class VoxelMap {
   Eigen::Vector3d last_slide_position_ = Eigen::Vector3d::Zero();
   bool slid_once_ = false;
   std::uint64_t removed_ = 0;
+  // Voxels dropped by slide(), freed kRetiredPerInsert per insert().
+  static constexpr std::size_t kRetiredPerInsert = 4096;
+  std::vector<std::unique_ptr<Node>> retired_;
   std::uint64_t generation_ = 1;  // bumped by every change of the map (invalidates hints)
+  // insert()'s work arrays, kept to avoid allocating per scan.
+  static constexpr std::uint32_t kNoBatch = 0xFFFFFFFFU;
+  std::vector<Node*> batch_roots_;
+  std::vector<std::uint32_t> point_batch_;
+  std::vector<std::uint32_t> batch_offsets_;
+  std::vector<std::uint32_t> batch_cursor_;
+  std::vector<std::uint32_t> batch_order_;
 };
 
 }  // namespace livod::estimator

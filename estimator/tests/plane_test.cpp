@@ -107,6 +107,29 @@ TEST(Plane, RejectsNonPlanarSetsAndComputesResiduals) {
   EXPECT_GT(r.variance, 1e-4);  // at least the point's own variance along n
 }
 
+TEST(Plane, MapFormGivesTheFullCovarianceVariance) {
+  // The voxel map keeps (C_nn, C_nq n, n^T C_qq n) instead of the 6x6 covariance: the residual
+  // variance must not change, for points on, off and far along the plane.
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int trial = 0; trial < 10; ++trial) {
+    const auto pts = noisy_plane(rng, 20 + 5 * trial, 0.003);
+    const Plane plane = fit_plane(pts, 0.0025);
+    ASSERT_TRUE(plane.is_plane);
+    const MapPlane m = map_plane(plane);
+    EXPECT_DOUBLE_EQ(m.extent2, 9.0 * plane.radius * plane.radius);
+    for (int k = 0; k < 20; ++k) {
+      const Eigen::Vector3d p = plane.center + Eigen::Vector3d(g(rng), g(rng), g(rng)) * 0.7;
+      Eigen::Matrix3d S = Eigen::Matrix3d::Identity() * 1e-4;
+      S(0, 1) = S(1, 0) = 2e-5;
+      const auto full = plane_residual(plane, p, S);
+      const auto reduced = plane_residual(m, p, S);
+      EXPECT_NEAR(reduced.distance, full.distance, 1e-12);
+      EXPECT_NEAR(reduced.variance, full.variance, 1e-12 * full.variance);
+    }
+  }
+}
+
 TEST(PointCovariance, RangeAlongTheRayBearingAcrossIt) {
   PointNoise noise;
   noise.range_sigma_m = 0.02;

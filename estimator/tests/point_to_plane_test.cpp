@@ -20,13 +20,13 @@ TEST(PointToPlane, JacobianMatchesFiniteDifferences) {
     x.R_world_imu = so3::exp(Eigen::Vector3d(g(rng), g(rng), g(rng)));
     x.p_world_imu = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 3.0;
     const Eigen::Vector3d p_imu = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 10.0;
-    const auto j = point_to_plane_jacobian(plane, p_imu, x);
+    const auto j = point_to_plane_jacobian(plane.normal, plane.d, p_imu, x);
     const double h = 1e-6;
     for (int c = 0; c < 6; ++c) {
       StateVector d = StateVector::Zero();
       d(c) = h;
-      const double fd = (point_to_plane_jacobian(plane, p_imu, x.boxplus(d)).h -
-                         point_to_plane_jacobian(plane, p_imu, x.boxplus(-d)).h) /
+      const double fd = (point_to_plane_jacobian(plane.normal, plane.d, p_imu, x.boxplus(d)).h -
+                         point_to_plane_jacobian(plane.normal, plane.d, p_imu, x.boxplus(-d)).h) /
                         (2 * h);
       EXPECT_NEAR(j.H(c), fd, 1e-6 * (1.0 + std::abs(fd))) << "trial " << trial << " col " << c;
     }
@@ -87,7 +87,7 @@ TEST(PointToPlane, UpdateRecoversAKnownPoseOffsetInAWellConstrainedRoom) {
   b.x.R_world_imu = truth.R_world_imu * so3::exp(Eigen::Vector3d(0.01, 0.01, -0.02));
   b.x.p_world_imu = truth.p_world_imu + Eigen::Vector3d(0.05, -0.04, 0.03);
   b.P = StateMatrix::Identity() * 0.01;
-  PointToPlane p2p(map, T_imu_lidar, 2);
+  PointToPlane p2p(map, T_imu_lidar, nullptr);
   IterationParams params;
   params.max_iterations = 10;
   const auto report = iterated_update(

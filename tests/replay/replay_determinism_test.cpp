@@ -1,5 +1,6 @@
 // `livod replay` is deterministic: the same recordings give byte-identical trajectory and map
-// files, also when the capture is given on the command line (NAME=PATH) under another name.
+// files, also when the capture is given on the command line (NAME=PATH) under another name, and
+// whatever the number of estimator threads (residuals and map refits run on a worker pool).
 
 #include <gtest/gtest.h>
 
@@ -27,6 +28,16 @@ TEST(ReplayDeterminism, SameInputSameBytes) {
   EXPECT_GT(a.summary.exported_points, 1000U);
   EXPECT_TRUE(map_a == test::read_file(b.map)) << "maps differ";
   EXPECT_EQ(b.summary.sensors.front().file, renamed.string());
+
+  for (const int threads : {1, 3}) {
+    daemon::replay::ReplayOptions options;
+    options.out_dir = test::temp_dir("determinism-threads-" + std::to_string(threads));
+    options.threads = threads;
+    const auto c =
+        daemon::replay::run_replay(test::load_clean_config(folder / "config.yaml"), options);
+    EXPECT_TRUE(test::read_file(c.trajectory) == traj_a) << threads << " thread(s)";
+    EXPECT_TRUE(test::read_file(c.map) == map_a) << threads << " thread(s)";
+  }
 }
 
 }  // namespace
