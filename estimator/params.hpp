@@ -47,8 +47,12 @@ struct ConvergenceParams {
 
 struct LioParams {
   int max_iterations = 5;
-  double dept_err = 0.02;           // range noise sigma (m)
-  double beam_err_deg = 0.05;       // bearing noise sigma (deg)
+  double dept_err = 0.02;      // range noise sigma (m)
+  double beam_err_deg = 0.05;  // bearing noise sigma (deg)
+  // The incidence-angle term of the point covariance (the hit smears along the ray by
+  // r tan(incidence) beam_err): in association and in the plane fits. FAST-LIVO2 leaves it out.
+  bool incidence_term = true;
+  double max_incidence_deg = 80.0;  // grazing hits are modelled as at this incidence
   double min_eigen_value = 0.0025;  // planarity: smallest eigenvalue (m^2) below this
   double sigma_num = 3.0;           // association gate, in sigmas
   double voxel_size = 0.5;          // root voxel edge (m)

@@ -24,6 +24,7 @@ PointNoise point_noise(const LioParams& lio) {
   PointNoise n;
   n.range_sigma_m = lio.dept_err;
   n.bearing_sigma_rad = lio.beam_err_deg * M_PI / 180.0;
+  n.max_incidence_rad = lio.max_incidence_deg * M_PI / 180.0;
   return n;
 }
 
@@ -35,7 +36,9 @@ LioPipeline::LioPipeline(PipelineOptions options)
       sync_(SyncParams{options_.max_queued_scans, options_.max_queued_imu}),
       map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
       downsampler_(options_.params.lio.filter_size_surf) {
-  p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.runner);
+  p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.runner,
+                                        point_noise(options_.params.lio),
+                                        options_.params.lio.incidence_term);
 }
 
 LioPipeline::~LioPipeline() = default;
@@ -219,14 +222,23 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   const Eigen::Matrix3d R_wl = R * options_.T_imu_lidar.linear();
   const Eigen::Matrix3d P_rot = belief_.P.block<3, 3>(kRot, kRot);
   const Eigen::Matrix3d P_pos = belief_.P.block<3, 3>(kPos, kPos);
+  const bool incidence = lio.incidence_term;
+  const bool matched = report.iterations > 0;  // the normals are from this scan's update
+  const std::vector<Eigen::Vector3d>* normals = &p2p_->matched_normals();
   world_points_.resize(scan_points_.size());
   for_points(scan_points_.size(), [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      const Eigen::Vector3d p_i = options_.T_imu_lidar * scan_points_[i].p_lidar;
+      const Eigen::Vector3d& p_l = scan_points_[i].p_lidar;
+      const Eigen::Vector3d p_i = options_.T_imu_lidar * p_l;
       const Eigen::Matrix3d J_rot = -R * so3::hat(p_i);
+      // A point that matched a plane knows its surface: its covariance gets the incidence term.
+      const Eigen::Matrix3d cov_l =
+          incidence && matched && !(*normals)[i].isZero()
+              ? point_covariance(p_l, noise, Eigen::Vector3d(R_wl.transpose() * (*normals)[i]))
+              : scan_points_[i].cov_lidar;
       world_points_[i].p = R * p_i + belief_.x.p_world_imu;
-      world_points_[i].cov = R_wl * scan_points_[i].cov_lidar * R_wl.transpose() +
-                             J_rot * P_rot * J_rot.transpose() + P_pos;
+      world_points_[i].cov =
+          R_wl * cov_l * R_wl.transpose() + J_rot * P_rot * J_rot.transpose() + P_pos;
     }
   });
   map_->insert(world_points_, options_.runner);

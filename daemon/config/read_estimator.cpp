@@ -38,6 +38,8 @@ void read_lio(MapReader& m, estimator::LioParams& lio) {
   m.read("max_iterations", lio.max_iterations, 1, 100);
   m.read("dept_err", lio.dept_err, left_open(0.0, 1.0));
   m.read("beam_err_deg", lio.beam_err_deg, left_open(0.0, 5.0));
+  m.read("incidence_term", lio.incidence_term);
+  m.read("max_incidence_deg", lio.max_incidence_deg, closed(0.0, 89.0));
   m.read("min_eigen_value", lio.min_eigen_value, left_open(0.0, 1.0));
   m.read("sigma_num", lio.sigma_num, left_open(0.0, 10.0));
   m.read("voxel_size", lio.voxel_size, closed(0.05, 10.0));

@@ -19,8 +19,8 @@ PlaneRowJacobian point_to_plane_jacobian(const Eigen::Vector3d& n, double d,
 }
 
 PointToPlane::PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar,
-                           TaskRunner* runner)
-    : map_(map), T_imu_lidar_(T_imu_lidar), runner_(runner) {}
+                           TaskRunner* runner, const PointNoise& noise, bool incidence)
+    : map_(map), T_imu_lidar_(T_imu_lidar), runner_(runner), noise_(noise), incidence_(incidence) {}
 
 void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const State& x,
                                    std::size_t begin, std::size_t end, Block& block) {
@@ -31,6 +31,7 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
   const Eigen::Matrix3d& R = x.R_world_imu;
   const Eigen::Matrix3d R_wl = R * T_imu_lidar_.linear();
   const Eigen::Vector3d t_wl = R * T_imu_lidar_.translation() + x.p_world_imu;
+  const double max_tan2 = std::pow(std::tan(noise_.max_incidence_rad), 2);
   const auto world = [&](std::size_t i) -> Eigen::Vector3d {
     return R_wl * points[i].p_lidar + t_wl;
   };
@@ -47,11 +48,23 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
       map_.prefetch_root(world(i + kSlotAhead));
     }
     if (i + kNodeAhead < end) map_.resolve(world(i + kNodeAhead), hints_[i + kNodeAhead]);
-    const Eigen::Vector3d p_i = T_imu_lidar_ * points[i].p_lidar;
-    const Eigen::Vector3d p_w = R * p_i + x.p_world_imu;
-    const Eigen::Matrix3d cov_w = R_wl * points[i].cov_lidar * R_wl.transpose();
+    const Eigen::Vector3d& p_l = points[i].p_lidar;
+    const Eigen::Vector3d p_i = T_imu_lidar_ * p_l;
+    PointQuery q;
+    q.p = R * p_i + x.p_world_imu;
+    q.cov = R_wl * points[i].cov_lidar * R_wl.transpose();
+    if (incidence_) {
+      const double r = p_l.norm();
+      if (r > 0.0) {
+        q.ray = R_wl * (p_l / r);
+        q.incidence_var = r * r * noise_.bearing_sigma_rad * noise_.bearing_sigma_rad;
+        q.max_tan2 = max_tan2;
+      }
+    }
+    normals_[i].setZero();
     PlaneMatch m;
-    if (!map_.match(p_w, cov_w, m, hints_[i])) continue;
+    if (!map_.match(q, m, hints_[i])) continue;
+    normals_[i] = m.plane->normal;
     const PlaneRowJacobian j = point_to_plane_jacobian(m.plane->normal, m.plane->d, p_i, x);
     const double w = 1.0 / (m.variance + 1e-6);
     const double z = -j.h;
@@ -67,6 +80,7 @@ bool PointToPlane::linearize(const std::vector<ScanPoint>& points, const State& 
                              NormalEquations& eq, int min_matches) {
   const std::size_t n = points.size();
   hints_.resize(n);
+  normals_.resize(n);
   const std::size_t blocks = (n + kBlockPoints - 1) / kBlockPoints;
   blocks_.resize(blocks);
   const auto block_task = [&](std::size_t b) {

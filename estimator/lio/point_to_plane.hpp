@@ -43,14 +43,19 @@ struct PointToPlaneStats {
 
 class PointToPlane {
  public:
-  // `runner` (nullptr: the caller's thread) must outlive this object.
-  PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, TaskRunner* runner);
+  // `runner` (nullptr: the caller's thread) must outlive this object. `incidence`: add the
+  // incidence-angle term of `noise` to each point's variance along the candidate plane's normal.
+  PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, TaskRunner* runner,
+               const PointNoise& noise = {}, bool incidence = false);
 
   // Accumulates the normal equations of every matched point at state x.
   bool linearize(const std::vector<ScanPoint>& points, const State& x, NormalEquations& eq,
                  int min_matches);
 
   [[nodiscard]] const PointToPlaneStats& stats() const { return stats_; }
+  // World normal of the plane each point matched at the last linearize() (zero: no match); the
+  // map insertion uses it for the points' incidence term.
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& matched_normals() const { return normals_; }
 
  private:
   // Normal equations of one block of points. Blocks have a fixed size, are filled in any order
@@ -69,6 +74,9 @@ class PointToPlane {
   const VoxelMap& map_;
   Eigen::Isometry3d T_imu_lidar_;
   TaskRunner* runner_;
+  PointNoise noise_;
+  bool incidence_;
+  std::vector<Eigen::Vector3d> normals_;
   std::vector<Block> blocks_;
   std::vector<VoxelMap::Hint> hints_;  // per point, reused over the iterations of one update
   PointToPlaneStats stats_;

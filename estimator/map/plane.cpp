@@ -1,6 +1,7 @@
 #include "estimator/map/plane.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 namespace livod::estimator {
@@ -121,6 +122,22 @@ MapPlane map_plane(const Plane& plane) {
   m.cov_nq_n = plane.cov.topRightCorner<3, 3>() * plane.normal;
   m.n_cov_qq_n = plane.normal.dot(plane.cov.bottomRightCorner<3, 3>() * plane.normal);
   return m;
+}
+
+double incidence_variance(const PointQuery& q, const Eigen::Vector3d& normal) {
+  if (q.incidence_var <= 0.0) return 0.0;
+  const double c = normal.dot(q.ray);
+  const double cos2 = c * c;
+  // tan^2(alpha) cos^2(alpha) = sin^2(alpha) = 1 - cos^2; beyond the largest incidence,
+  // tan^2(max) cos^2(alpha).
+  const double tan2 = cos2 > 0.0 ? (1.0 - cos2) / cos2 : q.max_tan2;
+  return q.incidence_var * std::min(tan2, q.max_tan2) * cos2;
+}
+
+PlaneResidual plane_residual(const MapPlane& plane, const PointQuery& q) {
+  PlaneResidual r = plane_residual(plane, q.p, q.cov);
+  r.variance += incidence_variance(q, plane.normal);
+  return r;
 }
 
 PlaneResidual plane_residual(const MapPlane& plane, const Eigen::Vector3d& p,

@@ -65,6 +65,24 @@ PlaneResidual plane_residual(const Plane& plane, const Eigen::Vector3d& p,
 PlaneResidual plane_residual(const MapPlane& plane, const Eigen::Vector3d& p,
                              const Eigen::Matrix3d& point_cov);
 
+// A point to test against planes: its position and range + bearing covariance, and what the
+// incidence-angle term needs. On a surface seen at incidence alpha the bearing uncertainty smears
+// the hit along the ray by r tan(alpha) sigma_b (point_covariance.hpp); along the plane normal
+// that adds (r sigma_b)^2 sin^2(alpha) to the variance. It depends on the plane, so it is added
+// per candidate plane (FAST-LIVO2's released code leaves the term out).
+struct PointQuery {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();    // world
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // world, range + bearing
+  Eigen::Vector3d ray = Eigen::Vector3d::Zero();  // unit, sensor to point; zero: no incidence term
+  double incidence_var = 0.0;                     // (r sigma_b)^2
+  double max_tan2 = 0.0;  // tan^2 of the largest incidence modelled (grazing hits are clamped)
+};
+// The incidence term's variance along `normal`: (r sigma_b tan(alpha))^2 cos^2(alpha), alpha
+// clamped to the largest incidence.
+double incidence_variance(const PointQuery& q, const Eigen::Vector3d& normal);
+// Residual of q: plane uncertainty + n^T cov n + the incidence term.
+PlaneResidual plane_residual(const MapPlane& plane, const PointQuery& q);
+
 // The Jacobian of (n, q) with respect to point j (for tests and diagnostics).
 Eigen::Matrix<double, 6, 3> plane_jacobian(const std::vector<CovPoint>& points, const Plane& plane,
                                            std::size_t j);

@@ -95,15 +95,15 @@ struct VoxelMap::Node {
 
   // Best plane in this subtree for p (highest likelihood passing the gates). best.plane == nullptr
   // means no candidate yet.
-  void best_match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, double sigma_num,
-                  PlaneMatch& best) const {
+  void best_match(const PointQuery& q, double sigma_num, PlaneMatch& best) const {
+    const Eigen::Vector3d& p = q.p;
     if (plane.is_plane && !split) {
       // The in-plane extent gate needs only the distance: test it before the variance, which
       // costs a 6x6 quadratic form. Gates compare squares (no square roots).
       const double distance = plane.normal.dot(p) + plane.d;
       const double along = (p - plane.center).squaredNorm() - distance * distance;
       if (along > plane.extent2) return;
-      const PlaneResidual r = plane_residual(plane, p, cov);
+      const PlaneResidual r = plane_residual(plane, q);
       if (!(r.variance > 0.0) || r.distance * r.distance >= sigma_num * sigma_num * r.variance) {
         return;
       }
@@ -115,7 +115,7 @@ struct VoxelMap::Node {
       return;
     }
     for (const auto& c : children) {
-      if (c) c->best_match(p, cov, sigma_num, best);
+      if (c) c->best_match(q, sigma_num, best);
     }
   }
 
@@ -201,19 +201,22 @@ void VoxelMap::insert(const std::vector<CovPoint>& points, TaskRunner* runner) {
 }
 
 bool VoxelMap::match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, PlaneMatch& out) const {
+  PointQuery q;
+  q.p = p;
+  q.cov = cov;
   Hint hint;
-  return match(p, cov, out, hint);
+  return match(q, out, hint);
 }
 
-bool VoxelMap::match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, PlaneMatch& out,
-                     Hint& hint) const {
+bool VoxelMap::match(const PointQuery& q, PlaneMatch& out, Hint& hint) const {
+  const Eigen::Vector3d& p = q.p;
   const double vs = lio_.voxel_size;
   const VoxelKey key = voxel_key(p, vs);
   if (hint.generation != generation_ || !(hint.key == key)) {
     hint = Hint{key, roots_.find(key), generation_};
   }
   PlaneMatch m;
-  if (hint.root != nullptr) hint.root->best_match(p, cov, lio_.sigma_num, m);
+  if (hint.root != nullptr) hint.root->best_match(q, lio_.sigma_num, m);
   if (m.plane == nullptr) {
     // Neighbour fallback, in voxel units: the voxels across the faces the point is near.
     const Eigen::Vector3d frac(p.x() / vs - static_cast<double>(key.x),
@@ -226,7 +229,7 @@ bool VoxelMap::match(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, Plane
       if (step == 0) continue;
       VoxelKey n = key;
       (axis == 0 ? n.x : axis == 1 ? n.y : n.z) += step;
-      if (const Node* root = roots_.find(n)) root->best_match(p, cov, lio_.sigma_num, m);
+      if (const Node* root = roots_.find(n)) root->best_match(q, lio_.sigma_num, m);
     }
   }
   if (m.plane == nullptr) return false;

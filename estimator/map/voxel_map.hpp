@@ -83,8 +83,7 @@ class VoxelMap {
     const Node* root = nullptr;
     std::uint64_t generation = 0;  // 0: empty; the map's generation_ starts at 1
   };
-  bool match(const Eigen::Vector3d& p_world, const Eigen::Matrix3d& cov_world, PlaneMatch& out,
-             Hint& hint) const;
+  bool match(const PointQuery& query, PlaneMatch& out, Hint& hint) const;
   // False once the map changed after the hint was made (it will be looked up again).
   [[nodiscard]] bool is_current(const Hint& hint) const { return hint.generation == generation_; }
 

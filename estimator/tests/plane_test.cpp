@@ -130,6 +130,30 @@ TEST(Plane, MapFormGivesTheFullCovarianceVariance) {
   }
 }
 
+TEST(PointCovariance, IncidenceTermAlongAPlaneNormalMatchesTheFullCovariance) {
+  // Association adds the incidence term per candidate plane (PointQuery); map insertion builds
+  // the full covariance with the surface normal. Both must give the same variance along n.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  PointNoise noise;
+  noise.range_sigma_m = 0.02;
+  noise.bearing_sigma_rad = 0.003;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Vector3d p = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 8.0;
+    const Eigen::Vector3d n = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const Eigen::Matrix3d full = point_covariance(p, noise, n);
+    PointQuery q;
+    q.p = p;
+    q.cov = point_covariance(p, noise);
+    q.ray = p.normalized();
+    q.incidence_var = p.squaredNorm() * noise.bearing_sigma_rad * noise.bearing_sigma_rad;
+    q.max_tan2 = std::pow(std::tan(noise.max_incidence_rad), 2);
+    const double expected = n.dot(full * n);
+    EXPECT_NEAR(n.dot(q.cov * n) + incidence_variance(q, n), expected, 1e-12 + 1e-9 * expected)
+        << "trial " << trial;
+  }
+}
+
 TEST(PointCovariance, RangeAlongTheRayBearingAcrossIt) {
   PointNoise noise;
   noise.range_sigma_m = 0.02;
