@@ -128,9 +128,9 @@ std::filesystem::path monterey_config(const std::string& tag, const std::string&
 // stands still for its first ~0.3 s and then pulls away (the forward specific force rises from
 // 0.45 to about 1.7 m/s^2; the $GPRMC, updated once a second, still says 0 knots). At rest the
 // accelerometers read |a| = 9.41 m/s^2, 4 % below gravity: a calibration (scale or bias) error
-// of the sensor, not motion (the window passes the static check). The initialiser accepts the first 30 samples and
-// says so with the measured |g| and the gyro bias (sensor 3 reads about -29 deg/s, 0.51 rad/s
-// about z). Every IMU sample reaches the clock domain and the estimator.
+// of the sensor, not motion (the window passes the static check). The initialiser accepts the
+// first 30 samples and says so with the measured |g| and the gyro bias (sensor 3 reads about
+// -29 deg/s, 0.51 rad/s about z). Every IMU sample reaches the clock domain and the estimator.
 TEST(ReplayHdl32e, RealMontereyCaptureFeedsEveryImuSampleToTheEstimator) {
   const auto pcap = test::data_path(kMonterey);
   const DecodedCapture capture =
