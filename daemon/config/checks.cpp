@@ -39,10 +39,6 @@ void check_unique_names(ProblemList& problems, const LivodConfig& config,
   }
 }
 
-bool has_internal_imu_section(Driver driver) {
-  return driver == Driver::ouster || driver == Driver::livox_sdk1 || driver == Driver::livox_sdk2;
-}
-
 // Resolves body_frame to a sensor index; reports what is wrong with it.
 void resolve_body_frame(ProblemList& problems, LivodConfig& config,
                         const std::vector<SensorSite>& sites, Position at) {
@@ -78,7 +74,7 @@ void resolve_body_frame(ProblemList& problems, LivodConfig& config,
   const SensorConfig& s = config.sensors[static_cast<std::size_t>(index)];
   const std::string label = sensor_label(sites, config, static_cast<std::size_t>(index));
   if (internal) {
-    if (!has_internal_imu_section(s.driver) || !model_has_internal_imu(s.driver, s.model)) {
+    if (!model_has_internal_imu(s.driver, s.model)) {
       problems.error(ProblemKind::inconsistent, "body_frame", at,
                      label + " has no internal IMU" +
                          (candidates.empty() ? std::string() : "; IMUs: " + join(candidates)));

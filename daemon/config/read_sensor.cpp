@@ -143,9 +143,15 @@ bool read_udp(MapReader& u, Driver driver, const std::string& model, UdpSourceCo
     const auto v = p.take(kPortNames[i]);
     if (!v) continue;
     if (std::find(names.begin(), names.end(), kPortNames[i]) == names.end()) {
+      // The HDL-32E's IMU has no port of its own: its words come in the position packets.
+      const std::string hint =
+          driver == Driver::velodyne && std::string_view(kPortNames[i]) == "imu"
+              ? "; the HDL-32E's internal IMU arrives in its position "
+                "packets, on the 'position' port"
+              : "";
       problems.error(ProblemKind::inconsistent, v->path, v->at,
                      std::string(enum_name(driver)) + " sensors have no '" + kPortNames[i] +
-                         "' stream (their ports: " + join(names) + ")");
+                         "' stream (their ports: " + join(names) + ")" + hint);
       continue;
     }
     const auto port = parse_integer(problems, *v, 1, 65535);
@@ -602,18 +608,20 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
     read_frame_cut(f, *driver, sensor.frame_cut);
   }
 
-  const bool can_have_imu =
-      *driver == Driver::ouster || *driver == Driver::livox_sdk1 || *driver == Driver::livox_sdk2;
+  const bool can_have_imu = driver_has_internal_imu_models(*driver);
   sensor.imu.enabled = can_have_imu && model_has_internal_imu(*driver, sensor.model);
   if (const auto v = take_applicable(m, "imu", can_have_imu,
                                      "LiDARs with an internal IMU (ouster, livox_sdk1, "
-                                     "livox_sdk2)")) {
+                                     "livox_sdk2, velodyne HDL-32E)")) {
     MapReader i(problems, v->node, v->path, v->at);
     bool enabled = sensor.imu.enabled;
     if (i.read("enabled", enabled)) {
       if (enabled && !model_has_internal_imu(*driver, sensor.model)) {
         problems.error(ProblemKind::inconsistent, i.child_path("enabled"), i.key_at("enabled"),
-                       "the " + sensor.model + " has no internal IMU");
+                       "the " + sensor.model + " has no internal IMU" +
+                           (*driver == Driver::velodyne
+                                ? std::string(" (of the Velodynes only the HDL-32E has one)")
+                                : std::string()));
       } else {
         sensor.imu.enabled = enabled;
       }

@@ -54,6 +54,11 @@ std::optional<std::string> canonical_model(Driver driver, std::string_view model
   return std::nullopt;
 }
 
+bool driver_has_internal_imu_models(Driver driver) {
+  return driver == Driver::ouster || driver == Driver::livox_sdk1 || driver == Driver::livox_sdk2 ||
+         driver == Driver::velodyne;
+}
+
 bool model_has_internal_imu(Driver driver, std::string_view canonical) {
   switch (driver) {
     case Driver::ouster:
@@ -62,6 +67,9 @@ bool model_has_internal_imu(Driver driver, std::string_view canonical) {
     case Driver::livox_sdk1:
       // Mid-40 and Mid-70 have no IMU (the IMU push-rate command is not available on them).
       return canonical != "MID-40" && canonical != "MID-70";
+    case Driver::velodyne:
+      // Of the Velodynes only the HDL-32E sends gyro and accelerometer words (position packets).
+      return canonical == "HDL-32E";
     default:
       return false;
   }

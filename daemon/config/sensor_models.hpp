@@ -18,6 +18,10 @@ bool model_required(Driver driver);
 // The canonical spelling of `model` for this driver ("os-1-64" -> "OS1-64"), or nullopt.
 std::optional<std::string> canonical_model(Driver driver, std::string_view model);
 
+// Drivers with at least one model that has an internal IMU: their sensors take an `imu` section.
+bool driver_has_internal_imu_models(Driver driver);
+// The internal IMUs: Ouster (all), Livox SDK2 (all), Livox SDK1 except Mid-40/Mid-70, and the
+// Velodyne HDL-32E (gyros and accelerometers in its position packets, on the position port).
 bool model_has_internal_imu(Driver driver, std::string_view canonical);
 // Factory host ports of the first unit of this model.
 UdpPorts default_ports(Driver driver, std::string_view canonical);

@@ -74,7 +74,11 @@ std::string summarize_config(const LivodConfig& config) {
     if (!s.model.empty()) out << ' ' << s.model;
     if (!s.enabled) out << " (disabled)";
     out << ", " << describe_source(s);
-    if (s.imu.enabled) out << ", internal IMU";
+    if (s.imu.enabled) {
+      // The HDL-32E's IMU shares the position packets (and port) with the GPS time.
+      out << (s.driver == Driver::velodyne ? ", internal IMU (in the position packets)"
+                                           : ", internal IMU");
+    }
     if (sensor_kind(s.driver) == SensorKind::camera) {
       out << ", " << enum_name(s.camera.model) << ' ' << s.camera.width << 'x' << s.camera.height;
       if (s.camera.scale != 1.0) out << " x" << s.camera.scale;

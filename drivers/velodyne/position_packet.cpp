@@ -7,12 +7,6 @@
 namespace livod::drivers::velodyne {
 namespace {
 
-// HDL-32E user's manual, positioning packet (Figure B3); VeloView vtkVelodyneHDLPositionReader.
-constexpr double kGyroDegPerSecPerLsb = 0.09766;
-constexpr double kTemperatureCPerLsb = 0.1453;
-constexpr double kTemperatureOffsetC = 25.0;
-constexpr double kAccelGPerLsb = 0.001221;
-constexpr double kStandardGravity = 9.80665;  // m/s^2 per g
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 int twelve_bit_signed(std::uint16_t word) {
@@ -34,14 +28,14 @@ PositionDecodeResult decode_position_packet(std::span<const std::byte> payload) 
   p.pps_raw = wire::u8(payload, wire::kPpsStatusOffset);
   if (p.pps_raw <= 3) p.pps = static_cast<PpsStatus>(p.pps_raw);
 
-  for (std::size_t i = 0; i < 3; ++i) {
-    const std::size_t base = wire::kImuWordsOffset + 8 * i;
+  for (std::size_t i = 0; i < wire::kImuSensors; ++i) {
+    const std::size_t base = wire::kImuWordsOffset + 2 * wire::kImuWordsPerSensor * i;
     auto& m = p.motion[i];
-    m.gyro_deg_s = twelve_bit_signed(wire::u16le(payload, base)) * kGyroDegPerSecPerLsb;
-    m.temperature_c = twelve_bit_signed(wire::u16le(payload, base + 2)) * kTemperatureCPerLsb +
-                      kTemperatureOffsetC;
-    m.accel_x_g = twelve_bit_signed(wire::u16le(payload, base + 4)) * kAccelGPerLsb;
-    m.accel_y_g = twelve_bit_signed(wire::u16le(payload, base + 6)) * kAccelGPerLsb;
+    m.gyro_deg_s = twelve_bit_signed(wire::u16le(payload, base)) * kHdlGyroDegPerSecPerLsb;
+    m.temperature_c = twelve_bit_signed(wire::u16le(payload, base + 2)) * kHdlTemperatureCPerLsb +
+                      kHdlTemperatureOffsetC;
+    m.accel_x_g = twelve_bit_signed(wire::u16le(payload, base + 4)) * kHdlAccelGPerLsb;
+    m.accel_y_g = twelve_bit_signed(wire::u16le(payload, base + 6)) * kHdlAccelGPerLsb;
   }
 
   // The sentence is NUL-terminated; without a NUL it runs to the end of the packet.
@@ -69,7 +63,7 @@ ImuVectors hdl32e_imu_in_lidar_frame(const PositionPacket& packet) {
   };
   ImuVectors out;
   out.gyro_rad_s = to_lidar(gyro_velodyne) * kDegToRad;
-  out.accel_m_s2 = to_lidar(accel_velodyne) * kStandardGravity;
+  out.accel_m_s2 = to_lidar(accel_velodyne) * kHdlStandardGravity;
   return out;
 }
 

@@ -17,8 +17,16 @@ namespace livod::drivers::velodyne {
 
 enum class PpsStatus : std::uint8_t { kAbsent = 0, kSynchronizing = 1, kLocked = 2, kError = 3 };
 
+// Scale factors of the HDL-32E motion words (12-bit two's complement): HDL-32E user's manual,
+// positioning packet (Figure B3); VeloView vtkVelodyneHDLPositionReader.
+inline constexpr double kHdlGyroDegPerSecPerLsb = 0.09766;
+inline constexpr double kHdlTemperatureCPerLsb = 0.1453;
+inline constexpr double kHdlTemperatureOffsetC = 25.0;
+inline constexpr double kHdlAccelGPerLsb = 0.001221;
+inline constexpr double kHdlStandardGravity = 9.80665;  // m/s^2 per g in the SI conversion
+
 // One of the HDL-32E's three motion sensors, converted from 12-bit two's complement words with
-// the HDL-32E manual's scale factors.
+// the scale factors above.
 struct HdlMotionSensor {
   double gyro_deg_s = 0.0;     // 0.09766 deg/s per LSB
   double temperature_c = 0.0;  // 0.1453 C per LSB + 25 C

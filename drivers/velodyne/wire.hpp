@@ -1,6 +1,7 @@
 #pragma once
-// Byte layout of Velodyne UDP payloads (§4.1, §4.2 of shared/docs/sensor-protocols.md) and the
-// little-endian readers used by the packet decoders. Callers check lengths before reading.
+// Byte layout of Velodyne UDP payloads (§4.1, §4.2 of shared/docs/sensor-protocols.md), the
+// little-endian readers used by the packet decoders and the writers used by packet encoders (the
+// simulator, tests). Callers check lengths before reading or writing.
 
 #include <cstddef>
 #include <cstdint>
@@ -31,6 +32,8 @@ inline constexpr std::uint32_t kMicrosecondsPerHour = 3'600'000'000U;
 
 // Position packet (VDEC src/telemetry_packet.cpp; VeloView vtkVelodyneHDLPositionReader).
 inline constexpr std::size_t kImuWordsOffset = 14;  // 3 sensors x (gyro, temp, accel x, accel y)
+inline constexpr std::size_t kImuWordsPerSensor = 4;
+inline constexpr std::size_t kImuSensors = 3;
 inline constexpr std::size_t kPositionTimestampOffset = 198;
 inline constexpr std::size_t kPpsStatusOffset = 202;
 inline constexpr std::size_t kNmeaOffset = 206;
@@ -46,6 +49,14 @@ inline std::uint32_t u32le(std::span<const std::byte> b, std::size_t offset) {
          (static_cast<std::uint32_t>(u8(b, offset + 1)) << 8) |
          (static_cast<std::uint32_t>(u8(b, offset + 2)) << 16) |
          (static_cast<std::uint32_t>(u8(b, offset + 3)) << 24);
+}
+
+inline void put_u16le(std::span<std::byte> b, std::size_t offset, std::uint16_t v) {
+  b[offset] = static_cast<std::byte>(v & 0xFF);
+  b[offset + 1] = static_cast<std::byte>(v >> 8);
+}
+inline void put_u32le(std::span<std::byte> b, std::size_t offset, std::uint32_t v) {
+  for (std::size_t i = 0; i < 4; ++i) b[offset + i] = static_cast<std::byte>((v >> (8 * i)) & 0xFF);
 }
 
 }  // namespace livod::drivers::velodyne::wire

@@ -18,6 +18,7 @@
 #include "io/euroc.hpp"
 #include "io/euroc_image.hpp"
 #include "io/pcap.hpp"
+#include "tools/sim/lidar_registry.hpp"
 
 namespace livod::sim {
 namespace {
@@ -464,6 +465,10 @@ SequenceBagReport write_sequence_bag(const std::filesystem::path& bag_path,
     } else {
       points = add(names.take("/velodyne_points", lidar.name, "points"),
                    ros::sensor_msgs::PointCloud2{});
+      // The HDL-32E's IMU (its position packets), on the topic of FAST_LIO's velodyne.yaml.
+      if (lidar.imu && simulated_lidar_has_imu(lidar.model)) {
+        imu = add(names.take("/imu/data", lidar.name, "imu"), ros::sensor_msgs::Imu{});
+      }
     }
     sources.push_back(std::make_unique<LidarSource>(lidar, spec.host_epoch_ns, points, imu));
   }

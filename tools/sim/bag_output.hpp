@@ -11,6 +11,7 @@
 //   Ouster LiDAR      /os_cloud_node/points   sensor_msgs/PointCloud2 (x y z intensity t ring)
 //   Ouster IMU        /os_cloud_node/imu      sensor_msgs/Imu
 //   Velodyne LiDAR    /velodyne_points        sensor_msgs/PointCloud2 (x y z intensity t ring time)
+//   HDL-32E IMU       /imu/data               sensor_msgs/Imu (from the position packets)
 //   CAN IMU           /imu                    sensor_msgs/Imu
 //   camera            /left_camera/image      sensor_msgs/Image mono8
 //

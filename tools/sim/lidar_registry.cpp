@@ -1,5 +1,6 @@
 #include "tools/sim/lidar_registry.hpp"
 
+#include <algorithm>
 #include <functional>
 
 #include "core/error.hpp"
@@ -13,20 +14,24 @@ namespace {
 struct Entry {
   const char* model;
   const char* description;
+  bool internal_imu;
   std::function<std::unique_ptr<SimLidar>(const SimLidarOptions&)> make;
 };
 
 // One line per simulated model (SIM-LIDAR-REGISTRY).
 std::vector<Entry> entries() {
   return {
-      {"AVIA", "Livox Avia (SDK1), 6-line rosette, 240 kpts/s, internal IMU", make_sim_avia},
-      {"MID-360", "Livox Mid-360 (SDK2), 360 deg, 4 lines, 200 kpts/s, internal IMU",
+      {"AVIA", "Livox Avia (SDK1), 6-line rosette, 240 kpts/s, internal IMU", true, make_sim_avia},
+      {"MID-360", "Livox Mid-360 (SDK2), 360 deg, 4 lines, 200 kpts/s, internal IMU", true,
        make_sim_mid360},
-      {"OS1-64", "Ouster OS1-64, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU",
+      {"OS1-64", "Ouster OS1-64, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU", true,
        make_sim_os1_64},
-      {"OS1-128", "Ouster OS1-128, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU",
+      {"OS1-128", "Ouster OS1-128, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU", true,
        make_sim_os1_128},
-      {"VLP-16", "Velodyne VLP-16, 600 RPM, data + position packets", make_sim_vlp16},
+      {"VLP-16", "Velodyne VLP-16, 600 RPM, data + position packets", false, make_sim_vlp16},
+      {"HDL-32E",
+       "Velodyne HDL-32E, 600 RPM, data + position packets, internal IMU in the position packets",
+       true, make_sim_hdl32e},
       // SIM-LIDAR-REGISTRY: one line per simulated model
   };
 }
@@ -37,6 +42,12 @@ std::vector<std::pair<std::string, std::string>> simulated_lidar_models() {
   std::vector<std::pair<std::string, std::string>> out;
   for (const auto& e : entries()) out.emplace_back(e.model, e.description);
   return out;
+}
+
+bool simulated_lidar_has_imu(const std::string& model) {
+  const auto all = entries();
+  return std::any_of(all.begin(), all.end(),
+                     [&](const Entry& e) { return model == e.model && e.internal_imu; });
 }
 
 std::unique_ptr<SimLidar> make_sim_lidar(const std::string& model, const SimLidarOptions& options) {

@@ -27,6 +27,9 @@ struct SimLidarOptions {
 // Models the simulator can write; each entry is (model name, one-line description).
 std::vector<std::pair<std::string, std::string>> simulated_lidar_models();
 
+// True when the simulated model sends an internal IMU (false for unknown models).
+bool simulated_lidar_has_imu(const std::string& model);
+
 // Throws livod::Error naming the known models when `model` is not simulated.
 std::unique_ptr<SimLidar> make_sim_lidar(const std::string& model, const SimLidarOptions& options);
 

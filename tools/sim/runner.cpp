@@ -321,8 +321,8 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
       if (lidar_driver(mount.model) == std::string("ouster")) {
         cfg << "    metadata: " << mount.name << ".json\n";
       }
-      // Only the models with an internal IMU take the key (the Velodynes have none).
-      if (lidar_driver(mount.model) != std::string("velodyne")) {
+      // Only the models with an internal IMU take the key (of the Velodynes, the HDL-32E).
+      if (simulated_lidar_has_imu(mount.model)) {
         cfg << "    imu: {enabled: " << (mount.imu ? "true" : "false") << "}\n";
       }
       // Also when the body is this LiDAR's own IMU: the loader wants the LiDAR -> IMU extrinsic.

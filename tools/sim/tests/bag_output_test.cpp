@@ -210,7 +210,9 @@ void check_bag_equals_outputs(const std::string& name, double duration, bool ima
     expected_topics.insert(points);
     expect_scans_equal(topics.at(points), decoded, livox, name + " " + points);
     if (mount.imu && !decoded.imu.empty()) {
-      const std::string imu = livox ? "/livox/imu" : "/os_cloud_node/imu";
+      const std::string imu = livox    ? "/livox/imu"
+                              : ouster ? "/os_cloud_node/imu"
+                                       : "/imu/data";  // the HDL-32E's
       ASSERT_TRUE(topics.contains(imu)) << name << ": no " << imu;
       expected_topics.insert(imu);
       expect_imu_equal(topics.at(imu), decoded.imu, decoded.imu_stamps_ns, name + " " + imu);
@@ -276,6 +278,12 @@ TEST(BagOutput, OusterBagHoldsExactlyTheDecodedCapture) {
 // The VLP-16 cloud when the model is simulated, the CAN IMU in any case.
 TEST(BagOutput, StreetVehicleBagHoldsTheCanImuAndTheVelodyneCloud) {
   check_bag_equals_outputs("street_vehicle_vlp16", 0.6, false);
+}
+
+// The HDL-32E's cloud and its internal IMU (from the position packets).
+TEST(BagOutput, Hdl32eBagHoldsTheCloudAndTheInternalImu) {
+  ASSERT_TRUE(simulated("HDL-32E")) << "the simulator has no HDL-32E model";
+  check_bag_equals_outputs("street_vehicle_hdl32e", 0.6, false);
 }
 
 // Header stamps are the true host time of each measurement: the sensor clock (offset, skew, a

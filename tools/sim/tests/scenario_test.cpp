@@ -35,7 +35,8 @@ TEST(Scenario, NamedScenariosAreListedAndConsistent) {
 }
 
 TEST(Scenario, StreetScenariosTravelAtLeast300m) {
-  for (const char* name : {"street_vehicle_vlp16", "street_vehicle_os1_128"}) {
+  for (const char* name :
+       {"street_vehicle_vlp16", "street_vehicle_hdl32e", "street_vehicle_os1_128"}) {
     const Scenario s = make_scenario(name);
     const Trajectory traj(s.trajectory);
     double length = 0.0;
