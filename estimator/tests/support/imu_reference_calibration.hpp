@@ -4,13 +4,14 @@
 //   * R_body_imu and the gyro bias: the reference's rotation increments over 0.1 s against the
 //     integrated gyro (Wahba's problem, alternated with the mean residual rate);
 //   * the accelerometer bias and the gravity direction in the reference's world frame: the second
-//     difference of the reference positions over +-0.1 s is exactly the triangle-weighted mean of
-//     the world acceleration, which the IMU gives as R (f - b_a) + g: linear least squares.
+//     difference of the reference positions over +-0.1 s is the triangle-weighted mean of the
+//     world acceleration, which the IMU gives as R (f - b_a) + g: linear least squares.
 //     The gravity magnitude is fixed (livod's ImuParams::gravity_m_s2): with little roll and
 //     pitch (EuRoC) it cannot be told from the accelerometer bias along the vertical axis;
 //   * noise levels for the initial covariance and the process noise, from the same residuals
 //     (nothing is tuned by hand): reference orientation, velocity and position noise, bias and
-//     gravity uncertainty (least-squares covariance), per-sample IMU white noise.
+//     gravity uncertainty (least-squares covariance), per-sample IMU white noise. Only the bias
+//     random walks, which one span cannot see, come from outside (BiasRandomWalk).
 // The propagation then starts from the reference pose, the reference velocity (central
 // difference over +-0.1 s), these biases and this gravity, and runs livod's propagate().
 
