@@ -133,6 +133,7 @@ class LioPipeline {
   } init_counters_;  // input while the IMU initialisation is pending
   ImuPoseTrack track_;
   std::vector<std::uint32_t> indices_;
+  std::vector<std::uint32_t> ring_counts_;  // valid points seen per ring (point_filter_num)
   std::vector<Eigen::Vector3d> undistorted_;
   std::vector<ScanPoint> scan_points_;
   std::vector<CovPoint> world_points_;
