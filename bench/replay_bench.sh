@@ -46,11 +46,11 @@ case "$mode" in
   memory)
     run room_handheld_mid360 900 ""
     out=$(cat "$work/last")
-    # frames.csv columns: t (2), map_bytes (19), exported_points (20), rss_bytes (21).
+    # frames.csv columns: t (2), map_bytes (20), exported_points (21), rss_bytes (22).
     awk -F, 'NR == 2 {t0 = $2}
              NR > 1 {m = int(($2 - t0) / 60); if (!(m in seen)) {seen[m] = 1;
                printf "minute %3d: RSS %7.1f MiB, estimator map %6.2f MiB, map.pcd points %d\n",
-                      m, $21 / 1048576, $19 / 1048576, $20}}' "$out/frames.csv" |
+                      m, $22 / 1048576, $20 / 1048576, $21}}' "$out/frames.csv" |
       awk 'NR == 1 || NR == 2 || NR % 5 == 1'
     ;;
   *)

@@ -44,7 +44,8 @@ struct FrameTimings {
   double propagate_ms = 0.0;
   double undistort_ms = 0.0;
   double downsample_ms = 0.0;
-  double update_ms = 0.0;  // association + residuals + solves, all iterations
+  double residuals_ms = 0.0;  // point covariances, association and residual rows, all iterations
+  double update_ms = 0.0;     // the iterated update without its residuals (solves, covariance)
   double map_ms = 0.0;
   double total_ms = 0.0;
 };

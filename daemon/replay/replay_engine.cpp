@@ -57,7 +57,7 @@ struct ReplayedSensor {
 
 // The per-frame columns kept for the report's distributions (4 bytes each per frame).
 struct FrameSeries {
-  std::vector<float> total, cpu, propagate, undistort, downsample, update, map;
+  std::vector<float> total, cpu, propagate, undistort, downsample, residuals, update, map;
   std::vector<float> raw_points, used_points, matched, iterations;
 
   void add(const estimator::FrameReport& r, double cpu_ms) {
@@ -67,6 +67,7 @@ struct FrameSeries {
     propagate.push_back(static_cast<float>(t.propagate_ms));
     undistort.push_back(static_cast<float>(t.undistort_ms));
     downsample.push_back(static_cast<float>(t.downsample_ms));
+    residuals.push_back(static_cast<float>(t.residuals_ms));
     update.push_back(static_cast<float>(t.update_ms));
     map.push_back(static_cast<float>(t.map_ms));
     raw_points.push_back(static_cast<float>(r.raw_points));
@@ -342,6 +343,7 @@ ReplaySummary Replay::summarise(double wall_s) const {
   s.propagate_ms = distribution(series_.propagate);
   s.undistort_ms = distribution(series_.undistort);
   s.downsample_ms = distribution(series_.downsample);
+  s.residuals_ms = distribution(series_.residuals);
   s.update_ms = distribution(series_.update);
   s.map_ms = distribution(series_.map);
   s.raw_points = distribution(series_.raw_points);

@@ -64,7 +64,7 @@ std::string json_distribution(const Distribution& d) {
 std::string text_distribution(const char* name, const Distribution& d, const char* unit,
                               int decimals) {
   return fmt::format(
-      "  {:<22} p50 {:>9.{}f}  p95 {:>9.{}f}  p99 {:>9.{}f}  max {:>9.{}f}  "
+      "  {:<24} p50 {:>9.{}f}  p95 {:>9.{}f}  p99 {:>9.{}f}  max {:>9.{}f}  "
       "mean {:>9.{}f} {}\n",
       name, d.p50, decimals, d.p95, decimals, d.p99, decimals, d.max, decimals, d.mean, decimals,
       unit);
@@ -106,14 +106,15 @@ std::string format_timing_text(const ReplaySummary& s) {
   out += text_distribution("propagate", s.propagate_ms, "ms", 3);
   out += text_distribution("undistort", s.undistort_ms, "ms", 3);
   out += text_distribution("downsample", s.downsample_ms, "ms", 3);
-  out += text_distribution("residuals + update", s.update_ms, "ms", 3);
+  out += text_distribution("residuals", s.residuals_ms, "ms", 3);
+  out += text_distribution("update", s.update_ms, "ms", 3);
   out += text_distribution("map", s.map_ms, "ms", 3);
   out += fmt::format(
       "  time split (share of the mean frame): propagate {:.1f} %, undistort {:.1f} %, "
-      "downsample {:.1f} %, residuals + update {:.1f} %, map {:.1f} %\n",
+      "downsample {:.1f} %, residuals {:.1f} %, update {:.1f} %, map {:.1f} %\n",
       share(s.propagate_ms, s.frame_ms), share(s.undistort_ms, s.frame_ms),
-      share(s.downsample_ms, s.frame_ms), share(s.update_ms, s.frame_ms),
-      share(s.map_ms, s.frame_ms));
+      share(s.downsample_ms, s.frame_ms), share(s.residuals_ms, s.frame_ms),
+      share(s.update_ms, s.frame_ms), share(s.map_ms, s.frame_ms));
   out += "\nper-frame counts:\n";
   out += text_distribution("raw points", s.raw_points, "", 0);
   out += text_distribution("points after downsample", s.used_points, "", 0);
@@ -163,11 +164,13 @@ std::string format_timing_json(const ReplaySummary& s) {
   out += fmt::format("  \"frame_ms\": {},\n  \"frame_cpu_ms\": {},\n",
                      json_distribution(s.frame_ms), json_distribution(s.frame_cpu_ms));
   out += fmt::format(
-      "  \"stage_ms\": {{\"propagate\": {}, \"undistort\": {}, \"downsample\": {}, \"update\": {}, "
+      "  \"stage_ms\": {{\"propagate\": {}, \"undistort\": {}, \"downsample\": {}, \"residuals\": "
+      "{}, "
+      "\"update\": {}, "
       "\"map\": {}}},\n",
       json_distribution(s.propagate_ms), json_distribution(s.undistort_ms),
-      json_distribution(s.downsample_ms), json_distribution(s.update_ms),
-      json_distribution(s.map_ms));
+      json_distribution(s.downsample_ms), json_distribution(s.residuals_ms),
+      json_distribution(s.update_ms), json_distribution(s.map_ms));
   out += fmt::format(
       "  \"raw_points\": {},\n  \"used_points\": {},\n  \"matched\": {},\n  \"iterations\": {},\n",
       json_distribution(s.raw_points), json_distribution(s.used_points),
@@ -225,7 +228,8 @@ std::size_t current_rss_bytes() {
 FrameTable::FrameTable(const std::filesystem::path& path) : path_(path), out_(path) {
   if (!out_) throw Error("cannot create " + path.string());
   out_ << "frame,t,raw_points,used_points,matched,iterations,converged,updated,degenerate,"
-          "translation_ratio,propagate_ms,undistort_ms,downsample_ms,update_ms,map_ms,total_ms,"
+          "translation_ratio,propagate_ms,undistort_ms,downsample_ms,residuals_ms,update_ms,map_ms,"
+          "total_ms,"
           "cpu_ms,map_planes,map_bytes,exported_points,rss_bytes\n";
 }
 
@@ -233,12 +237,14 @@ void FrameTable::add(std::size_t frame, const estimator::FrameReport& r, double 
                      std::size_t exported_points, std::size_t rss_bytes) {
   const auto& t = r.timings;
   out_ << fmt::format(
-      "{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},"
-      "{}\n",
+      "{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{}"
+      ","
+      "{},{},{}\n",
       frame, format_seconds(r.t.ns), r.raw_points, r.used_points, r.matched, r.iterations,
       r.converged ? 1 : 0, r.updated ? 1 : 0, r.degeneracy.degenerate ? 1 : 0,
-      r.degeneracy.translation_ratio, t.propagate_ms, t.undistort_ms, t.downsample_ms, t.update_ms,
-      t.map_ms, t.total_ms, cpu_ms, r.map.planes, r.map.bytes, exported_points, rss_bytes);
+      r.degeneracy.translation_ratio, t.propagate_ms, t.undistort_ms, t.downsample_ms,
+      t.residuals_ms, t.update_ms, t.map_ms, t.total_ms, cpu_ms, r.map.planes, r.map.bytes,
+      exported_points, rss_bytes);
 }
 
 void FrameTable::close() {

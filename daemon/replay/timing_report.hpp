@@ -57,7 +57,8 @@ struct ReplaySummary {
   // Per frame (estimator stages, ms). frame_ms is wall time (what a live system sees, inflated
   // when other processes take the CPU); frame_cpu_ms is the CPU time of the frame over all threads
   // (it exceeds the wall time when the worker pool keeps both cores busy).
-  Distribution frame_ms, frame_cpu_ms, propagate_ms, undistort_ms, downsample_ms, update_ms, map_ms;
+  Distribution frame_ms, frame_cpu_ms, propagate_ms, undistort_ms, downsample_ms, residuals_ms,
+      update_ms, map_ms;
   // Per frame (counts).
   Distribution raw_points, used_points, matched, iterations;
   std::uint64_t degenerate_frames = 0;

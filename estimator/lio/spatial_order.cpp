@@ -1,6 +1,7 @@
 #include "estimator/lio/spatial_order.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "estimator/grid_index.hpp"
@@ -41,14 +42,30 @@ std::uint64_t morton_code(const Eigen::Vector3d& p, double inv_cell) {
 void SpatialOrder::apply(std::vector<Eigen::Vector3d>& points, double cell_m) {
   if (points.size() < 2 || !(cell_m > 0.0)) return;
   const double inv_cell = 1.0 / cell_m;
-  keyed_.resize(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    keyed_[i] = {morton_code(points[i], inv_cell), static_cast<std::uint32_t>(i)};
+  const std::size_t n = points.size();
+  keys_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    // 30 bits of the code (10 per axis) above the index: unique keys, so the order is total.
+    const std::uint64_t code = morton_code(points[i], inv_cell) & 0x3FFFFFFFULL;
+    keys_[i] = (code << 32) | static_cast<std::uint64_t>(i);
   }
-  // (code, index) pairs are unique, so the plain sort is stable in effect.
-  std::sort(keyed_.begin(), keyed_.end());
-  scratch_.resize(points.size());
-  for (std::size_t i = 0; i < keyed_.size(); ++i) scratch_[i] = points[keyed_[i].second];
+  // LSD radix sort on the code, 10 bits a pass (stable, so each pass keeps the previous order).
+  swap_.resize(n);
+  std::array<std::uint32_t, 1024> counts{};
+  for (int shift = 32; shift < 62; shift += 10) {
+    counts.fill(0);
+    for (const std::uint64_t k : keys_) ++counts[(k >> shift) & 1023U];
+    std::uint32_t sum = 0;
+    for (auto& c : counts) {
+      const std::uint32_t here = c;
+      c = sum;
+      sum += here;
+    }
+    for (const std::uint64_t k : keys_) swap_[counts[(k >> shift) & 1023U]++] = k;
+    keys_.swap(swap_);
+  }
+  scratch_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) scratch_[i] = points[keys_[i] & 0xFFFFFFFFULL];
   points.swap(scratch_);
 }
 

@@ -7,6 +7,8 @@
 namespace livod::estimator {
 
 VoxelKey voxel_key(const Eigen::Vector3d& p, double voxel_size) {
+  // floor(p / s) exactly as the division gives it: a multiplication by 1/s can round a point
+  // lying on a voxel face into the neighbour.
   return VoxelKey{floor_to_int(p.x() / voxel_size), floor_to_int(p.y() / voxel_size),
                   floor_to_int(p.z() / voxel_size)};
 }
@@ -148,13 +150,27 @@ void VoxelMap::insert(const std::vector<CovPoint>& points, TaskRunner* runner) {
   for (std::size_t i = 0; i < retire; ++i) retired_.pop_back();
   const double vs = lio_.voxel_size;
   // 1. Bucket the points by root voxel (creating roots), roots numbered in order of first touch.
-  //    Consecutive points of a scan often share a voxel: the last lookup is reused.
+  //    Keys are computed in parallel; the table lookups run with their slots prefetched some
+  //    points ahead, and consecutive points of a voxel (points come in spatial order) reuse the
+  //    last lookup.
+  const std::size_t n = points.size();
+  point_keys_.resize(n);
+  const auto compute_keys = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) point_keys_[i] = voxel_key(points[i].p, vs);
+  };
+  if (runner != nullptr) {
+    parallel_for(*runner, n, 2048, compute_keys);
+  } else {
+    compute_keys(0, n);
+  }
+  constexpr std::size_t kAhead = 16;
   batch_roots_.clear();
-  point_batch_.resize(points.size());
+  point_batch_.resize(n);
   VoxelKey last_key;
   std::uint32_t last_batch = kNoBatch;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const VoxelKey key = voxel_key(points[i].p, vs);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i + kAhead < n) roots_.prefetch(point_keys_[i + kAhead]);
+    const VoxelKey& key = point_keys_[i];
     if (last_batch != kNoBatch && key == last_key) {
       point_batch_[i] = last_batch;
       continue;

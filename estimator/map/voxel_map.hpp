@@ -144,6 +144,7 @@ class VoxelMap {
   // insert()'s work arrays, kept to avoid allocating per scan.
   static constexpr std::uint32_t kNoBatch = 0xFFFFFFFFU;
   std::vector<Node*> batch_roots_;
+  std::vector<VoxelKey> point_keys_;
   std::vector<std::uint32_t> point_batch_;
   std::vector<std::uint32_t> batch_offsets_;
   std::vector<std::uint32_t> batch_cursor_;
