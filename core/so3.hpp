@@ -83,9 +83,13 @@ Matrix3<typename Derived::Scalar> exp(const Eigen::MatrixBase<Derived>& phi) {
   const Matrix3<Scalar> k = hat(phi);
   Scalar a;  // sin θ / θ
   Scalar b;  // (1 - cos θ) / θ²
-  if (theta < detail::small_angle<Scalar>()) {
-    a = Scalar(1) - theta2 / Scalar(6);
-    b = Scalar(0.5) - theta2 / Scalar(24);
+  if (theta < Scalar(0.05)) {
+    // Taylor series to θ⁶: the next terms are below 2e-16 here, and the small rotations of
+    // undistortion (one per LiDAR point) and propagation skip two trigonometric calls.
+    a = Scalar(1) -
+        theta2 / Scalar(6) * (Scalar(1) - theta2 / Scalar(20) * (Scalar(1) - theta2 / Scalar(42)));
+    b = Scalar(0.5) -
+        theta2 / Scalar(24) * (Scalar(1) - theta2 / Scalar(30) * (Scalar(1) - theta2 / Scalar(56)));
   } else {
     a = sin(theta) / theta;
     // 2 sin²(θ/2) instead of 1 - cos θ: no cancellation for moderate angles.

@@ -192,7 +192,8 @@ void LioPipeline::process_group(const MeasurementGroup& group,
     if (scan.point(i).cast<double>().squaredNorm() < blind2) continue;
     indices_.push_back(i);
   }
-  undistort_points(track_, options_.T_imu_lidar, group.t_update, scan, indices_, undistorted_);
+  undistort_points(track_, options_.T_imu_lidar, group.t_update, scan, indices_, undistorted_,
+                   options_.runner);
   report.timings.undistort_ms = ms_since(t0);
 
   t0 = std::chrono::steady_clock::now();

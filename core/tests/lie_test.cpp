@@ -85,6 +85,20 @@ TEST(So3, ExpMatchesAngleAxisAndIsARotation) {
   }
 }
 
+TEST(So3, ExpSeriesBranchIsExactToRoundOff) {
+  // Below 0.05 rad exp() uses a Taylor series instead of sin/cos: on both sides of the switch and
+  // down to tiny angles it must agree with the angle-axis rotation to round-off.
+  std::mt19937 rng(17);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (double angle : {1e-12, 1e-9, 1e-6, 1e-3, 0.01, 0.03, 0.0499999, 0.05, 0.0500001, 0.07}) {
+    for (int k = 0; k < 20; ++k) {
+      const Vector3d axis = Vector3d(g(rng), g(rng), g(rng)).normalized();
+      const Matrix3d expected = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+      EXPECT_LT((so3::exp(Vector3d(angle * axis)) - expected).norm(), 4e-16) << angle;
+    }
+  }
+}
+
 TEST(So3, ExpMatchesMatrixExponentialOfHat) {
   std::mt19937 rng(8);
   for (const Vector3d& phi : test_rotation_vectors(rng)) {

@@ -21,8 +21,8 @@ Eigen::Isometry3d ImuPoseTrack::T_world_imu(MappedTime t) const {
 
 void undistort_points(const ImuPoseTrack& track, const Eigen::Isometry3d& T_imu_lidar,
                       MappedTime t_ref, const LidarScan& scan,
-                      const std::vector<std::uint32_t>& indices,
-                      std::vector<Eigen::Vector3d>& out) {
+                      const std::vector<std::uint32_t>& indices, std::vector<Eigen::Vector3d>& out,
+                      TaskRunner* runner) {
   out.resize(indices.size());
   const Eigen::Isometry3d T_lidar_world_ref = (track.T_world_imu(t_ref) * T_imu_lidar).inverse();
   const Eigen::Matrix3d A = T_lidar_world_ref.linear();
@@ -40,40 +40,49 @@ void undistort_points(const ImuPoseTrack& track, const Eigen::Isometry3d& T_imu_
   // last at or before the point's time (T_world_imu()'s extrapolation), folded per IMU segment
   // (M, c, ...) and per distinct point time (G, g): a point then costs two matrix-vector
   // products.
-  std::size_t seg = 0;
-  std::size_t cached_seg = poses.size();  // none
-  Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  Eigen::Vector3d Av = Eigen::Vector3d::Zero();
-  Eigen::Vector3d Aa = Eigen::Vector3d::Zero();
-  std::int64_t cached_t = std::numeric_limits<std::int64_t>::min();
-  Eigen::Matrix3d G = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d g = Eigen::Vector3d::Zero();
-  for (std::size_t k = 0; k < indices.size(); ++k) {
-    const std::uint32_t i = indices[k];
-    const MappedTime t = scan.point_time(i);
-    if (t.ns != cached_t) {
-      // Segment of t: points are mostly time-ordered, so step forward; search otherwise.
-      if (t < poses[seg].t) {
-        const auto it = std::upper_bound(poses.begin(), poses.end(), t,
-                                         [](MappedTime x, const ImuPose& p) { return x < p.t; });
-        seg = it == poses.begin() ? 0 : static_cast<std::size_t>(it - poses.begin()) - 1;
+  // Each range caches its own segment and time: the result of a point does not depend on how the
+  // points are split between threads.
+  const auto undistort_range = [&](std::size_t begin, std::size_t end) {
+    std::size_t seg = 0;
+    std::size_t cached_seg = poses.size();  // none
+    Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    Eigen::Vector3d Av = Eigen::Vector3d::Zero();
+    Eigen::Vector3d Aa = Eigen::Vector3d::Zero();
+    std::int64_t cached_t = std::numeric_limits<std::int64_t>::min();
+    Eigen::Matrix3d G = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::uint32_t i = indices[k];
+      const MappedTime t = scan.point_time(i);
+      if (t.ns != cached_t) {
+        // Segment of t: points are mostly time-ordered, so step forward; search otherwise.
+        if (t < poses[seg].t) {
+          const auto it = std::upper_bound(poses.begin(), poses.end(), t,
+                                           [](MappedTime x, const ImuPose& p) { return x < p.t; });
+          seg = it == poses.begin() ? 0 : static_cast<std::size_t>(it - poses.begin()) - 1;
+        }
+        while (seg + 1 < poses.size() && poses[seg + 1].t <= t) ++seg;
+        const ImuPose& p = poses[seg];
+        if (seg != cached_seg) {
+          M = A * p.R_world_imu;
+          c = A * p.p_world_imu + a;
+          Av = A * p.v_world;
+          Aa = 0.5 * (A * p.acc_world);
+          cached_seg = seg;
+        }
+        const double dt = to_seconds(t - p.t);
+        G = M * so3::exp(p.omega_imu * dt);
+        g = c + Av * dt + Aa * (dt * dt);
+        cached_t = t.ns;
       }
-      while (seg + 1 < poses.size() && poses[seg + 1].t <= t) ++seg;
-      const ImuPose& p = poses[seg];
-      if (seg != cached_seg) {
-        M = A * p.R_world_imu;
-        c = A * p.p_world_imu + a;
-        Av = A * p.v_world;
-        Aa = 0.5 * (A * p.acc_world);
-        cached_seg = seg;
-      }
-      const double dt = to_seconds(t - p.t);
-      G = M * so3::exp(p.omega_imu * dt);
-      g = c + Av * dt + Aa * (dt * dt);
-      cached_t = t.ns;
+      out[k] = G * (B * scan.point(i).cast<double>() + b) + g;
     }
-    out[k] = G * (B * scan.point(i).cast<double>() + b) + g;
+  };
+  if (runner != nullptr) {
+    parallel_for(*runner, indices.size(), 2048, undistort_range);
+  } else {
+    undistort_range(0, indices.size());
   }
 }
 

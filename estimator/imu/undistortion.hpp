@@ -9,6 +9,7 @@
 
 #include "core/measurement.hpp"
 #include "core/time.hpp"
+#include "estimator/task_runner.hpp"
 
 namespace livod::estimator {
 
@@ -38,9 +39,11 @@ class ImuPoseTrack {
 };
 
 // p_lidar(t_ref) = T_lidar_imu * T_world_imu(t_ref)^-1 * T_world_imu(t_i) * T_imu_lidar * p_i
-// for the scan points `indices`; results in the same order.
+// for the scan points `indices`; results in the same order, independent of `runner` (nullptr: on
+// the caller's thread).
 void undistort_points(const ImuPoseTrack& track, const Eigen::Isometry3d& T_imu_lidar,
                       MappedTime t_ref, const LidarScan& scan,
-                      const std::vector<std::uint32_t>& indices, std::vector<Eigen::Vector3d>& out);
+                      const std::vector<std::uint32_t>& indices, std::vector<Eigen::Vector3d>& out,
+                      TaskRunner* runner = nullptr);
 
 }  // namespace livod::estimator
