@@ -80,10 +80,58 @@ class BagTopic {
   std::uint64_t messages_ = 0;
 };
 
+// livox_ros_driver2 (Mid-360, HAP) publishes the same CustomMsg under its own package name: the
+// same definition, so the same md5, and the same bytes.
+constexpr std::string_view kLivoxDriver2CustomMsg = "livox_ros_driver2/CustomMsg";
+
+bool is_livox_custom_msg(std::string_view type) {
+  return type == rb::MessageTraits<rb::livox_ros_driver::CustomMsg>::type ||
+         type == kLivoxDriver2CustomMsg;
+}
+
+void decode_custom_msg(const rb::BagMessage& m, rb::livox_ros_driver::CustomMsg& out) {
+  if (m.connection != nullptr && m.connection->type == kLivoxDriver2CustomMsg) {
+    const auto md5 = rb::MessageTraits<rb::livox_ros_driver::CustomMsg>::md5sum;
+    if (m.connection->md5sum != md5 && m.connection->md5sum != "*") {
+      throw Error("topic " + m.connection->topic + ": livox_ros_driver2/CustomMsg with md5 " +
+                  m.connection->md5sum + ", not livox_ros_driver's " + std::string(md5));
+    }
+    rb::deserialize(m.data, out);
+    return;
+  }
+  m.decode_into(out);
+}
+
+// Malformed messages of a topic are counted and skipped, so that one corrupt message loses one
+// measurement. A topic whose first messages all fail is a configuration problem (a wrong time
+// field, a topic of another layout): that stops the replay with the first error.
+class MalformedMessages {
+ public:
+  explicit MalformedMessages(std::string where) : where_(std::move(where)) {}
+
+  void ok() { ++ok_; }
+  void failed(const std::exception& e) {
+    if (count_++ == 0) first_ = e.what();
+    if (ok_ == 0 && count_ >= kGiveUpAfter) {
+      throw Error(where_ + ": the first " + std::to_string(count_) +
+                  " messages cannot be read: " + first_);
+    }
+  }
+  [[nodiscard]] std::uint64_t count() const { return count_; }
+
+ private:
+  static constexpr std::uint64_t kGiveUpAfter = 5;
+  std::string where_;
+  std::string first_;
+  std::uint64_t ok_ = 0;
+  std::uint64_t count_ = 0;
+};
+
 class BagImuSource final : public ReplaySource {
  public:
-  BagImuSource(BagTopic topic, const DatasetConfig& dataset)
+  BagImuSource(BagTopic topic, const DatasetConfig& dataset, std::string where)
       : topic_(std::move(topic)),
+        malformed_(std::move(where)),
         accel_scale_(dataset.accel_unit == CanUnit::g ? kStandardGravity : 1.0),
         gyro_scale_(dataset.gyro_unit == CanUnit::deg_s ? M_PI / 180.0 : 1.0) {}
 
@@ -92,7 +140,13 @@ class BagImuSource final : public ReplaySource {
   void deliver(const drivers::DecoderSinks& sinks) override {
     const auto m = topic_.take();
     if (!m) return;
-    m->decode_into(msg_);
+    try {
+      m->decode_into(msg_);
+    } catch (const FormatError& e) {
+      malformed_.failed(e);
+      return;
+    }
+    malformed_.ok();
     ImuSample s;
     s.stamp.sensor = SensorTime(msg_.header.stamp.to_ns());
     s.stamp.host = HostTime(m->time_ns);
@@ -111,8 +165,9 @@ class BagImuSource final : public ReplaySource {
   void finish(const drivers::DecoderSinks& /*sinks*/) override {}
 
   [[nodiscard]] std::string summary() const override {
-    return fmt::format("bag sensor_msgs/Imu: messages {}, non-finite samples dropped {}",
-                       topic_.messages(), non_finite_);
+    return fmt::format(
+        "bag sensor_msgs/Imu: messages {}, malformed {}, non-finite samples dropped {}",
+        topic_.messages(), malformed_.count(), non_finite_);
   }
   [[nodiscard]] std::optional<double> fraction_done() const override {
     return topic_.fraction_done();
@@ -120,6 +175,7 @@ class BagImuSource final : public ReplaySource {
 
  private:
   BagTopic topic_;
+  MalformedMessages malformed_;
   double accel_scale_;
   double gyro_scale_;
   rb::sensor_msgs::Imu msg_;
@@ -128,10 +184,11 @@ class BagImuSource final : public ReplaySource {
 
 class BagCloudSource final : public ReplaySource {
  public:
-  BagCloudSource(BagTopic topic, const DatasetConfig& dataset)
+  BagCloudSource(BagTopic topic, const DatasetConfig& dataset, std::string where)
       : topic_(std::move(topic)),
+        malformed_(std::move(where)),
         dataset_(dataset),
-        livox_(topic_.type() == "livox_ros_driver/CustomMsg") {}
+        livox_(is_livox_custom_msg(topic_.type())) {}
 
   std::optional<std::int64_t> peek_time() override { return topic_.peek_time(); }
 
@@ -139,13 +196,19 @@ class BagCloudSource final : public ReplaySource {
     const auto m = topic_.take();
     if (!m) return;
     bool ok = false;
-    if (livox_) {
-      m->decode_into(livox_msg_);
-      ok = custom_msg_to_scan(livox_msg_, scan_, stats_);
-    } else {
-      m->decode_into(cloud_msg_);
-      ok = point_cloud_to_scan(cloud_msg_, dataset_, scratch_, scan_, stats_);
+    try {
+      if (livox_) {
+        decode_custom_msg(*m, livox_msg_);
+        ok = custom_msg_to_scan(livox_msg_, scan_, stats_);
+      } else {
+        m->decode_into(cloud_msg_);
+        ok = point_cloud_to_scan(cloud_msg_, dataset_, scratch_, scan_, stats_);
+      }
+    } catch (const FormatError& e) {
+      malformed_.failed(e);
+      return;
     }
+    malformed_.ok();
     if (!ok) return;
     scan_.sequence = sequence_++;
     // A recorder receives a scan once it is complete: back-date the record time to the scan
@@ -161,9 +224,10 @@ class BagCloudSource final : public ReplaySource {
 
   [[nodiscard]] std::string summary() const override {
     return fmt::format(
-        "bag {}: messages {} ({} empty), points {} ({} invalid), dropped beyond 2.1 s {}",
-        topic_.type(), stats_.messages, stats_.empty_messages, stats_.points, stats_.invalid_points,
-        stats_.dropped_points);
+        "bag {}: messages {} ({} empty, {} malformed, {} with unusable times), points {} ({} "
+        "invalid), dropped (beyond 2.1 s or no time) {}",
+        topic_.type(), topic_.messages(), stats_.empty_messages, malformed_.count(),
+        stats_.bad_time_messages, stats_.points, stats_.invalid_points, stats_.dropped_points);
   }
   [[nodiscard]] std::optional<double> fraction_done() const override {
     return topic_.fraction_done();
@@ -171,6 +235,7 @@ class BagCloudSource final : public ReplaySource {
 
  private:
   BagTopic topic_;
+  MalformedMessages malformed_;
   DatasetConfig dataset_;
   bool livox_;
   rb::livox_ros_driver::CustomMsg livox_msg_;
@@ -192,7 +257,12 @@ class BagPacketSource final : public ReplaySource {
   void deliver(const drivers::DecoderSinks& sinks) override {
     const auto m = topic_.take();
     if (!m) return;
-    m->decode_into(msg_);
+    try {
+      m->decode_into(msg_);
+    } catch (const FormatError&) {
+      ++malformed_;  // the packet decoder counts what it cannot decode; this never reached it
+      return;
+    }
     const std::span<const std::byte> payload(reinterpret_cast<const std::byte*>(msg_.buf.data()),
                                              msg_.buf.size());
     // The recorded message has no UDP port; decoders that share a port tell packets by size.
@@ -204,10 +274,10 @@ class BagPacketSource final : public ReplaySource {
   [[nodiscard]] std::string summary() const override {
     const auto& c = decoder_->counters();
     return fmt::format(
-        "bag ouster_ros/PacketMsg: messages {}; {}: packets {} (lidar {}, imu {}), scans {} ({} "
-        "incomplete), points {}, sequence gaps {}, decode errors {}",
-        topic_.messages(), decoder_->model_name(), c.packets, c.lidar_packets, c.imu_packets,
-        c.scans, c.incomplete_scans, c.points, c.sequence_gaps, c.decode_errors);
+        "bag ouster_ros/PacketMsg: messages {} ({} malformed); {}: packets {} (lidar {}, imu {}), "
+        "scans {} ({} incomplete), points {}, sequence gaps {}, decode errors {}",
+        topic_.messages(), malformed_, decoder_->model_name(), c.packets, c.lidar_packets,
+        c.imu_packets, c.scans, c.incomplete_scans, c.points, c.sequence_gaps, c.decode_errors);
   }
   [[nodiscard]] std::optional<double> fraction_done() const override {
     return topic_.fraction_done();
@@ -217,6 +287,7 @@ class BagPacketSource final : public ReplaySource {
   BagTopic topic_;
   std::unique_ptr<drivers::LidarDecoder> decoder_;
   rb::ouster_ros::PacketMsg msg_;
+  std::uint64_t malformed_ = 0;
 };
 
 }  // namespace
@@ -231,12 +302,12 @@ std::unique_ptr<ReplaySource> make_bag_source(const std::filesystem::path& file,
   if (type == "sensor_msgs/Imu") {
     if (kind != SensorKind::imu)
       throw Error(where + ": IMU messages for a " + std::string(enum_name(kind)));
-    return std::make_unique<BagImuSource>(std::move(cursor), sensor.dataset);
+    return std::make_unique<BagImuSource>(std::move(cursor), sensor.dataset, where);
   }
-  if (type == "sensor_msgs/PointCloud2" || type == "livox_ros_driver/CustomMsg") {
+  if (type == "sensor_msgs/PointCloud2" || is_livox_custom_msg(type)) {
     if (kind != SensorKind::lidar)
       throw Error(where + ": point clouds for a " + std::string(enum_name(kind)));
-    return std::make_unique<BagCloudSource>(std::move(cursor), sensor.dataset);
+    return std::make_unique<BagCloudSource>(std::move(cursor), sensor.dataset, where);
   }
   if (type == "ouster_ros/PacketMsg") {
     if (!decoder) throw Error(where + ": raw packets need a packet LiDAR driver (ouster)");
@@ -244,7 +315,8 @@ std::unique_ptr<ReplaySource> make_bag_source(const std::filesystem::path& file,
   }
   throw Error(where +
               ": replay reads sensor_msgs/Imu, sensor_msgs/PointCloud2, "
-              "livox_ros_driver/CustomMsg and ouster_ros/PacketMsg topics");
+              "livox_ros_driver/CustomMsg, livox_ros_driver2/CustomMsg and ouster_ros/PacketMsg "
+              "topics");
 }
 
 }  // namespace livod::daemon::replay

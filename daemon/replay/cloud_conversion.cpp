@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace livod::daemon::replay {
 namespace {
@@ -10,6 +11,9 @@ namespace {
 namespace rb = io::rosbag;
 
 constexpr std::int64_t kMaxOffsetNs = std::numeric_limits<std::int32_t>::max();
+// Point times beyond +-73 years of the recording clock's epoch are garbage; bounding them keeps
+// every sum of two stamps inside int64 (a header stamp is below 2^62 ns).
+constexpr double kMaxAbsTimeNs = 2305843009213693952.0;  // 2^61
 
 bool usable(float x, float y, float z) {
   return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) &&
@@ -54,6 +58,10 @@ bool custom_msg_to_scan(const rb::livox_ros_driver::CustomMsg& msg, LidarScan& o
     ++stats.empty_messages;
     return false;
   }
+  if (static_cast<double>(msg.timebase) >= kMaxAbsTimeNs) {
+    ++stats.bad_time_messages;
+    return false;
+  }
   const std::int64_t base =
       msg.timebase != 0 ? static_cast<std::int64_t>(msg.timebase) : msg.header.stamp.to_ns();
   std::uint32_t first = std::numeric_limits<std::uint32_t>::max();
@@ -79,6 +87,9 @@ bool point_cloud_to_scan(const rb::sensor_msgs::PointCloud2& cloud, const Datase
     return std::find(names.begin(), names.end(), n) != names.end();
   };
   fields.intensity = has("intensity") ? "intensity" : (has("reflectivity") ? "reflectivity" : "");
+  // The laser of each point (point_filter_num counts per ring): Velodyne and Ouster drivers write
+  // "ring", livox_ros_driver2 "line"; without either, the row of an organised cloud.
+  fields.ring = has("ring") ? "ring" : (has("line") ? "line" : "");
   rb::extract_points(cloud, fields, scratch);
   if (scratch.empty()) {
     ++stats.empty_messages;
@@ -86,13 +97,24 @@ bool point_cloud_to_scan(const rb::sensor_msgs::PointCloud2& cloud, const Datase
   }
 
   const double scale = nanoseconds_per(dataset.time_unit);
-  auto to_ns = [scale](double v) { return static_cast<std::int64_t>(std::llround(v * scale)); };
+  // A point whose time is not a number or beyond kMaxAbsTimeNs is dropped (nullopt).
+  auto to_ns = [scale](double v) -> std::optional<std::int64_t> {
+    const double ns = v * scale;
+    if (!(std::abs(ns) < kMaxAbsTimeNs)) return std::nullopt;
+    return static_cast<std::int64_t>(std::llround(ns));
+  };
   std::int64_t lo = std::numeric_limits<std::int64_t>::max();
   std::int64_t hi = std::numeric_limits<std::int64_t>::min();
   for (const auto& p : scratch) {
-    const std::int64_t t = to_ns(p.time);
-    lo = std::min(lo, t);
-    hi = std::max(hi, t);
+    if (const auto t = to_ns(p.time)) {
+      lo = std::min(lo, *t);
+      hi = std::max(hi, *t);
+    }
+  }
+  if (lo > hi) {  // no point with a usable time
+    stats.dropped_points += scratch.size();
+    ++stats.bad_time_messages;
+    return false;
   }
   // Point time = base + value.
   std::int64_t base = 0;
@@ -103,7 +125,12 @@ bool point_cloud_to_scan(const rb::sensor_msgs::PointCloud2& cloud, const Datase
   out.start.sensor = SensorTime(base + lo);
   out.reserve(scratch.size());
   for (const auto& p : scratch) {
-    push_point(out, p.x, p.y, p.z, p.intensity, 0, base + to_ns(p.time), stats);
+    const auto t = to_ns(p.time);
+    if (!t) {
+      ++stats.dropped_points;
+      continue;
+    }
+    push_point(out, p.x, p.y, p.z, p.intensity, p.ring, base + *t, stats);
   }
   return !out.empty();
 }

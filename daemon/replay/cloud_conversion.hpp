@@ -15,7 +15,9 @@
 //
 // NaN / infinite coordinates and points at the origin (Livox "no return") are kept as invalid
 // (valid = 0), as decoders keep layout. A point more than 2.1 s (the int32 ns offset range) from
-// the scan start is dropped and counted: no real scan spans that long.
+// the scan start, or whose time is not a number, is dropped and counted: no real scan spans that
+// long. Each point keeps its laser (CustomMsg line, PointCloud2 "ring"/"line" field or the row of
+// an organised cloud) for the per-ring point filter.
 
 #include <cstdint>
 #include <vector>
@@ -33,6 +35,8 @@ struct CloudConversionStats {
   std::uint64_t invalid_points = 0;  // NaN / origin points (emitted with valid = 0)
   std::uint64_t dropped_points = 0;  // beyond the int32 offset range from the scan start
   std::uint64_t empty_messages = 0;  // messages without points (no scan emitted)
+  // Messages whose stamps are garbage (a timebase or every point time beyond 73 years): skipped.
+  std::uint64_t bad_time_messages = 0;
 };
 
 // Nanoseconds per unit of a per-point time field.

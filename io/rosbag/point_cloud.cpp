@@ -92,6 +92,7 @@ void extract_points(const sensor_msgs::PointCloud2& cloud, const CloudFields& fi
   const FieldReader z = find_field(cloud, fields.z);
   const FieldReader intensity = find_field(cloud, fields.intensity);
   const FieldReader time = find_field(cloud, fields.time);
+  const FieldReader ring = find_field(cloud, fields.ring);
   if (x.field == nullptr || y.field == nullptr || z.field == nullptr) {
     throw FormatError(std::string(kSource), 0, "x, y and z field names are required");
   }
@@ -131,6 +132,12 @@ void extract_points(const sensor_msgs::PointCloud2& cloud, const CloudFields& fi
               : static_cast<float>(read_point_field(point, *intensity.field, cloud.is_bigendian));
       p.time =
           time.field == nullptr ? 0.0 : read_point_field(point, *time.field, cloud.is_bigendian);
+      if (ring.field == nullptr) {
+        p.ring = static_cast<std::uint16_t>(std::min<std::uint32_t>(row, 0xFFFF));
+      } else {
+        const double r = read_point_field(point, *ring.field, cloud.is_bigendian);
+        p.ring = r >= 0.0 && r <= 65535.0 ? static_cast<std::uint16_t>(r) : 0;  // NaN fails too
+      }
     }
   }
 }

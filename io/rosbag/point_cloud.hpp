@@ -21,6 +21,9 @@ struct CloudPoint {
   float z = 0;
   float intensity = 0;  // 0 when no intensity field was asked for
   double time = 0;      // raw value of the time field; 0 when none was asked for
+  // Laser / line of the point: the ring field when one was asked for (out-of-range or non-finite
+  // values read 0), else the row of an organised cloud (Ouster's ROS driver: one row per beam).
+  std::uint16_t ring = 0;
 };
 
 struct CloudFields {
@@ -29,6 +32,7 @@ struct CloudFields {
   std::string z = "z";
   std::string intensity = "intensity";  // "" = none ("reflectivity" for some drivers)
   std::string time;                     // "" = none; e.g. "t", "time", "timestamp"
+  std::string ring;  // "" = the row index; e.g. "ring" (Velodyne, Ouster), "line" (Livox)
 };
 
 // Names of the cloud's fields (for error messages and driver auto-detection).

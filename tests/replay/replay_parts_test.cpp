@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -209,6 +210,59 @@ TEST(ReplayParts, PointCloudStampConventions) {
               std::string::npos)
         << e.what();
   }
+}
+
+TEST(ReplayParts, GarbageTimesAreDroppedNotOverflowed) {
+  std::vector<rb::CloudPoint> scratch;
+  LidarScan scan;
+  CloudConversionStats stats;
+  daemon::DatasetConfig d;
+  d.time_unit = daemon::TimeUnit::s;
+  // NaN, infinite and absurd times among good ones: only the good points remain, stamps sane.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  auto c = cloud_with_times<double>({0.01, nan, inf, -inf, 1e300, 0.02}, 8);
+  ASSERT_TRUE(daemon::replay::point_cloud_to_scan(c, d, scratch, scan, stats));
+  EXPECT_EQ(scan.size(), 2U);
+  EXPECT_EQ(stats.dropped_points, 4U);
+  EXPECT_EQ(scan.t_offset_ns[1], 10'000'000);
+  // Every time unusable: no scan, counted.
+  auto bad = cloud_with_times<double>({nan, 1e300}, 8);
+  EXPECT_FALSE(daemon::replay::point_cloud_to_scan(bad, d, scratch, scan, stats));
+  EXPECT_EQ(stats.bad_time_messages, 1U);
+  // A CustomMsg timebase near 2^64 ns (uninitialised memory in a recorder) is skipped.
+  auto m = custom_msg();
+  m.timebase = std::numeric_limits<std::uint64_t>::max() - 5;
+  EXPECT_FALSE(daemon::replay::custom_msg_to_scan(m, scan, stats));
+  EXPECT_EQ(stats.bad_time_messages, 2U);
+}
+
+TEST(ReplayParts, PointCloudRingsComeFromTheRingFieldOrTheRow) {
+  std::vector<rb::CloudPoint> scratch;
+  LidarScan scan;
+  CloudConversionStats stats;
+  const daemon::DatasetConfig d;
+  // Organised 2 x 3 cloud without a ring field: the row is the ring (Ouster's ROS driver).
+  auto c = cloud_with_times<std::uint32_t>({0, 1, 2, 3, 4, 5}, 6);
+  c.height = 2;
+  c.width = 3;
+  c.row_step = 3 * c.point_step;
+  ASSERT_TRUE(daemon::replay::point_cloud_to_scan(c, d, scratch, scan, stats));
+  EXPECT_EQ(scan.ring, (std::vector<std::uint16_t>{0, 0, 0, 1, 1, 1}));
+  // A uint16 "ring" field (Velodyne) wins; a value that is no ring number reads 0.
+  auto r = cloud_with_times<std::uint32_t>({0, 1, 2}, 6);
+  r.point_step += 4;
+  r.row_step = r.point_step * r.width;
+  std::vector<std::uint8_t> data(r.row_step);
+  const std::vector<float> rings = {7.0F, 31.0F, -1.0F};
+  for (std::size_t i = 0; i < 3; ++i) {
+    std::memcpy(&data[i * r.point_step], &r.data[i * 16], 16);
+    std::memcpy(&data[i * r.point_step + 16], &rings[i], 4);
+  }
+  r.data = data;
+  r.fields.push_back({"ring", 16, rb::sensor_msgs::PointField::kFloat32, 1});
+  ASSERT_TRUE(daemon::replay::point_cloud_to_scan(r, d, scratch, scan, stats));
+  EXPECT_EQ(scan.ring, (std::vector<std::uint16_t>{7, 31, 0}));
 }
 
 // A live two-LiDAR configuration with a CAN IMU (and a disabled bag sensor), for input
