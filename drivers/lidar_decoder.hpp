@@ -19,15 +19,19 @@ namespace livod::drivers {
 
 // Counters a decoder keeps; read by health reporting and printed by `livod decode`.
 struct DecoderCounters {
-  std::uint64_t packets = 0;         // payloads handed to on_packet()
-  std::uint64_t lidar_packets = 0;   // decoded point packets
-  std::uint64_t imu_packets = 0;     // decoded IMU packets
-  std::uint64_t aux_packets = 0;     // other recognised packets (position/telemetry/status)
-  std::uint64_t decode_errors = 0;   // malformed (bad length, bad CRC, bad header): skipped
-  std::uint64_t sequence_gaps = 0;   // packets missing according to the sensor's own counters
-  std::uint64_t scans = 0;           // scans emitted (including partial ones)
+  std::uint64_t packets = 0;           // payloads handed to on_packet()
+  std::uint64_t lidar_packets = 0;     // decoded point packets
+  std::uint64_t imu_packets = 0;       // decoded IMU packets
+  std::uint64_t aux_packets = 0;       // other recognised packets (position/telemetry/status)
+  std::uint64_t decode_errors = 0;     // malformed (bad length, bad CRC, bad header): skipped
+  std::uint64_t sequence_gaps = 0;     // packets missing according to the sensor's own counters
+  std::uint64_t scans = 0;             // scans emitted (including partial ones)
   std::uint64_t incomplete_scans = 0;  // scans emitted or dropped with missing packets/columns
-  std::uint64_t points = 0;          // points emitted (valid ones)
+  std::uint64_t points = 0;            // points emitted (valid ones)
+  // Points that arrived after the scan they belong to was closed (a packet delayed or reordered
+  // past the next scan's first packet): dropped, so that a late packet neither splits the scan
+  // under construction nor becomes a scan of its own.
+  std::uint64_t late_points = 0;
 };
 
 // Callbacks receive references valid only during the call (the decoder reuses its buffers).

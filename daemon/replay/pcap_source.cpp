@@ -40,10 +40,10 @@ class PcapSource final : public ReplaySource {
     return fmt::format(
         "pcap: records {}, datagrams {}, other ports {}, not UDP {}, malformed {}, incomplete "
         "fragment sets {}; {}: packets {} (lidar {}, imu {}), scans {} ({} incomplete), points "
-        "{}, sequence gaps {}, decode errors {}",
+        "{}, late points dropped {}, sequence gaps {}, decode errors {}",
         p.records, p.udp_datagrams, p.filtered, p.non_udp, p.malformed, p.incomplete_fragments,
         decoder_->model_name(), c.packets, c.lidar_packets, c.imu_packets, c.scans,
-        c.incomplete_scans, c.points, c.sequence_gaps, c.decode_errors);
+        c.incomplete_scans, c.points, c.late_points, c.sequence_gaps, c.decode_errors);
   }
 
  private:

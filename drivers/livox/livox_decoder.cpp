@@ -67,14 +67,19 @@ void LivoxDecoder::on_packet(const drivers::PacketView& packet,
   }
   ++counters_.lidar_packets;
 
-  // Sequence gaps.
+  // Sequence gaps. A packet older than the newest one seen (reordered or delayed on the link) is
+  // not a gap, and the newest one stays the reference; it was counted missing when its successor
+  // came, so it takes one back: sequence_gaps counts the packets that never arrived.
+  const bool older = last_packet_end_ns_ && packet_.timestamp_ns <= *last_packet_end_ns_;
+  if (older && counters_.sequence_gaps > 0) --counters_.sequence_gaps;
   if (model_.protocol == Protocol::kSdk2) {
-    if (last_udp_cnt_ && packet_.udp_cnt != 0 &&
-        packet_.udp_cnt != static_cast<std::uint16_t>(*last_udp_cnt_ + 1)) {
-      counters_.sequence_gaps += static_cast<std::uint16_t>(packet_.udp_cnt - *last_udp_cnt_ - 1);
+    const auto ahead = last_udp_cnt_ ? static_cast<std::int16_t>(packet_.udp_cnt - *last_udp_cnt_)
+                                     : std::int16_t{1};
+    if (last_udp_cnt_ && packet_.udp_cnt != 0 && ahead > 1) {
+      counters_.sequence_gaps += static_cast<std::uint64_t>(ahead - 1);
     }
-    last_udp_cnt_ = packet_.udp_cnt;
-  } else if (last_packet_end_ns_) {
+    if (!last_udp_cnt_ || ahead > 0 || packet_.udp_cnt == 0) last_udp_cnt_ = packet_.udp_cnt;
+  } else if (last_packet_end_ns_ && !older) {
     // The next packet starts one point interval after the previous packet's last point.
     const std::int64_t expected = *last_packet_end_ns_ + model_.point_interval_ns;
     const std::int64_t late = packet_.timestamp_ns - expected;
@@ -82,8 +87,10 @@ void LivoxDecoder::on_packet(const drivers::PacketView& packet,
     if (span > 0 && late > span / 2)
       counters_.sequence_gaps += static_cast<std::uint64_t>((late + span / 2) / span);
   }
-  last_packet_end_ns_ = packet_.timestamp_ns + packet_.span_ns;
-  last_span_ns_ = packet_.span_ns;
+  if (!older) {
+    last_packet_end_ns_ = packet_.timestamp_ns + packet_.span_ns;
+    last_span_ns_ = packet_.span_ns;
+  }
 
   for (std::uint16_t i = 0; i < packet_.count; ++i) {
     const LivoxPoint& p = packet_.points[i];
@@ -91,6 +98,11 @@ void LivoxDecoder::on_packet(const drivers::PacketView& packet,
     if (options_.keep_first_return_only && p.return_index != 0) continue;
     const std::int64_t t = packet_.timestamp_ns + p.t_offset_ns;
     const std::int64_t index = floor_div(t, options_.scan_period_ns);
+    if (index < newest_index_ && newest_index_ - index <= kClockResetWindows) {
+      ++counters_.late_points;  // its scan was emitted already
+      continue;
+    }
+    newest_index_ = index;
     if (scan_open_ && index != scan_index_) emit(sinks);
     if (!scan_open_) {
       scan_open_ = true;

@@ -6,6 +6,7 @@
 // timestamp further than 1.5 packet spans after the previous one.
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -59,6 +60,10 @@ class LivoxDecoder final : public drivers::LidarDecoder {
   LidarScan scan_;
   bool scan_open_ = false;
   std::int64_t scan_index_ = 0;  // floor(sensor time / period) of the open scan
+  // The newest window any point fell into: points of older windows are late (dropped), unless
+  // they are so much older that the sensor clock was reset (then the timeline restarts).
+  std::int64_t newest_index_ = std::numeric_limits<std::int64_t>::min();
+  static constexpr std::int64_t kClockResetWindows = 20;
   std::uint32_t next_sequence_ = 0;
   std::optional<std::uint16_t> last_udp_cnt_;
   std::optional<std::int64_t> last_packet_end_ns_;

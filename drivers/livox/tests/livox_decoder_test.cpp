@@ -96,6 +96,60 @@ TEST(LivoxDecoder, AviaSdk1GapsFromTimestampsAndMalformedPacketsAreCounted) {
   EXPECT_EQ(out.scans[0].ring[7], 1);  // line = point index mod 6
 }
 
+TEST(LivoxDecoder, ALatePacketIsDroppedWithoutSplittingTheScan) {
+  // Mid-360 packets 0.48 ms apart across the 1.1 s window boundary; packet 5 (in the first window)
+  // is delivered after packet 12 (in the second): the link delayed it. The scan of the second
+  // window must not be split, the late points are counted, and the reordering is no gap.
+  LivoxDecoder dec(*livox_model("MID-360"), LivoxDecoderOptions{});
+  Collected out;
+  const auto pts = points(3.0F);
+  const std::int64_t t0 = 1'097'120'000;  // packet 5 ends at 1.099995 s, packet 6 starts at 1.1 s
+  auto send = [&](int k) {
+    Sdk2Header h;
+    h.timestamp_ns = static_cast<std::uint64_t>(t0 + k * 480'000LL);
+    h.time_interval_100ns = 4750;
+    h.udp_cnt = static_cast<std::uint16_t>(k);
+    const auto bytes = encode_sdk2_points(h, pts);
+    dec.on_packet({bytes, t0 + k * 480'000LL + 600'000, 56301}, out.sinks());
+  };
+  for (int k = 0; k < 20; ++k) {
+    if (k == 5) continue;
+    send(k);
+    if (k == 12) send(5);
+  }
+  dec.flush(out.sinks());
+  // Windows [1.0, 1.1) (packets 0..4 and 5 were due there) and [1.1, 1.2).
+  ASSERT_EQ(out.scans.size(), 2U);
+  EXPECT_EQ(out.scans[0].start.sensor.ns, 1'000'000'000);
+  EXPECT_EQ(out.scans[1].start.sensor.ns, 1'100'000'000);
+  EXPECT_EQ(dec.counters().late_points, 96U);
+  EXPECT_EQ(dec.counters().sequence_gaps, 0U);
+  EXPECT_EQ(out.scans[0].size() + out.scans[1].size(), 19U * 96U);
+}
+
+TEST(LivoxDecoder, AClockResetRestartsTheTimeline) {
+  LivoxDecoder dec(*livox_model("MID-360"), LivoxDecoderOptions{});
+  Collected out;
+  const auto pts = points(3.0F);
+  auto send = [&](std::int64_t t, int k) {
+    Sdk2Header h;
+    h.timestamp_ns = static_cast<std::uint64_t>(t);
+    h.time_interval_100ns = 4750;
+    h.udp_cnt = static_cast<std::uint16_t>(k);
+    const auto bytes = encode_sdk2_points(h, pts);
+    dec.on_packet({bytes, t, 56301}, out.sinks());
+  };
+  for (int k = 0; k < 400; ++k) send(50'000'000'000LL + k * 480'000LL, k);
+  // The sensor restarted: its clock counts from zero again.
+  for (int k = 0; k < 400; ++k) send(k * 480'000LL, 400 + k);
+  dec.flush(out.sinks());
+  EXPECT_EQ(dec.counters().late_points, 0U);
+  std::size_t total = 0;
+  for (const auto& s : out.scans) total += s.size();
+  EXPECT_EQ(total, 800U * 96U);
+  EXPECT_EQ(out.scans.back().start.sensor.ns, 100'000'000);
+}
+
 TEST(LivoxDecoder, KnowsTheModelsAndTheirPorts) {
   EXPECT_FALSE(livox_model("VLP-16"));
   LivoxDecoder mid(*livox_model("MID-360"), {});

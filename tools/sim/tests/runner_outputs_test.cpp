@@ -103,15 +103,20 @@ TEST(RunnerOutputs, PcapDecodesToTheSimulatedPoints) {
   EXPECT_EQ(reader.stats().malformed, 0u);
   EXPECT_EQ(decoder.counters().decode_errors, 0u);
 
-  // A delay spike can reorder datagrams: compare in point-time order.
+  // A delay spike can reorder datagrams: compare in point-time order. A packet that arrives after
+  // the scan it belongs to was emitted is dropped and counted by the decoder (late points): every
+  // decoded point is a simulated one, and the simulated ones missing are exactly the late ones.
   const auto by_time = [](const TimedPoint& a, const TimedPoint& b) { return a.t < b.t; };
   std::stable_sort(decoded.begin(), decoded.end(), by_time);
   std::stable_sort(expected.begin(), expected.end(), by_time);
   ASSERT_GT(expected.size(), 200'000u);  // 1.5 s at 240 kpts/s, most with a return
-  ASSERT_EQ(decoded.size(), expected.size());
-  for (std::size_t i = 0; i < expected.size(); ++i) {
-    ASSERT_EQ(decoded[i].p, expected[i].p) << "point " << i;
+  ASSERT_EQ(decoded.size() + decoder.counters().late_points, expected.size());
+  EXPECT_LT(decoder.counters().late_points, expected.size() / 1000);
+  std::size_t d = 0;
+  for (std::size_t e = 0; e < expected.size() && d < decoded.size(); ++e) {
+    if (decoded[d].p == expected[e].p) ++d;  // times differ in clock (sensor vs scenario)
   }
+  EXPECT_EQ(d, decoded.size()) << "decoded point " << d << " was not simulated";
 }
 
 TEST(RunnerOutputs, GroundTruthIsTheTrajectoryInTumFormat) {
