@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/hash_mix.hpp"
 
 namespace livod::daemon::replay {
 namespace {
@@ -15,16 +16,6 @@ constexpr std::size_t kInitialSlots = 1 << 12;
 // beyond are not mapped. The bias keeps every packed key non-zero, so 0 marks an empty slot.
 constexpr std::int64_t kCoordBias = 1 << 20;
 constexpr std::int64_t kCoordLimit = (1 << 21) - 1;
-
-std::uint64_t mix(std::uint64_t k) {
-  // splitmix64 finaliser: spreads lattice keys over the table.
-  k ^= k >> 30;
-  k *= 0xbf58476d1ce4e5b9ULL;
-  k ^= k >> 27;
-  k *= 0x94d049bb133111ebULL;
-  k ^= k >> 31;
-  return k;
-}
 
 }  // namespace
 
@@ -46,7 +37,7 @@ bool MapAccumulator::add(const Eigen::Vector3d& p) {
     key = (key << 21) | static_cast<std::uint64_t>(biased);
   }
   const std::size_t mask = table_.size() - 1;
-  std::size_t slot = mix(key) & mask;
+  std::size_t slot = hash_mix(key) & mask;
   while (table_[slot] != 0) {
     if (table_[slot] == key) return false;
     slot = (slot + 1) & mask;
@@ -70,7 +61,7 @@ void MapAccumulator::grow() {
   const std::size_t mask = table_.size() - 1;
   for (const std::uint64_t key : old) {
     if (key == 0) continue;
-    std::size_t slot = mix(key) & mask;
+    std::size_t slot = hash_mix(key) & mask;
     while (table_[slot] != 0) slot = (slot + 1) & mask;
     table_[slot] = key;
   }

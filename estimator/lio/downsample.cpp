@@ -2,22 +2,10 @@
 
 #include <cmath>
 
+#include "core/hash_mix.hpp"
 #include "estimator/grid_index.hpp"
 
 namespace livod::estimator {
-namespace {
-
-std::uint64_t mix(std::uint64_t k) {
-  // splitmix64 finaliser: packed lattice keys differ in few bits, the table needs all of them.
-  k ^= k >> 30;
-  k *= 0xbf58476d1ce4e5b9ULL;
-  k ^= k >> 27;
-  k *= 0x94d049bb133111ebULL;
-  k ^= k >> 31;
-  return k;
-}
-
-}  // namespace
 
 void VoxelGridDownsampler::reserve_slots(std::size_t points) {
   // At most half full even if every point has its own cell.
@@ -46,7 +34,7 @@ void VoxelGridDownsampler::apply(std::vector<Eigen::Vector3d>& points) {
     const std::uint64_t key = (static_cast<std::uint64_t>(ix) << 42) |
                               (static_cast<std::uint64_t>(iy) << 21) |
                               static_cast<std::uint64_t>(iz);
-    std::size_t i = mix(key) & mask;
+    std::size_t i = hash_mix(key) & mask;
     while (slots_[i].generation == generation_ && slots_[i].key != key) i = (i + 1) & mask;
     Slot& slot = slots_[i];
     if (slot.generation != generation_) {

@@ -13,6 +13,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/hash_mix.hpp"
 #include "estimator/map/plane.hpp"
 #include "estimator/params.hpp"
 #include "estimator/task_runner.hpp"
@@ -28,12 +29,8 @@ struct VoxelKeyHash {
   std::size_t operator()(const VoxelKey& k) const {
     // Large primes combine the three coordinates, the splitmix64 finaliser spreads the result
     // over every bit (neighbouring lattice keys otherwise share buckets).
-    auto h = static_cast<std::uint64_t>(k.x * 73856093LL ^ k.y * 19349669LL ^ k.z * 83492791LL);
-    h ^= h >> 30;
-    h *= 0xbf58476d1ce4e5b9ULL;
-    h ^= h >> 27;
-    h *= 0x94d049bb133111ebULL;
-    h ^= h >> 31;
+    const auto h = hash_mix(
+        static_cast<std::uint64_t>(k.x * 73856093LL ^ k.y * 19349669LL ^ k.z * 83492791LL));
     return static_cast<std::size_t>(h);
   }
 };

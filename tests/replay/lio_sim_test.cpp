@@ -7,6 +7,7 @@
 #include "core/so3.hpp"
 #include "drivers/livox/livox_decoder.hpp"
 #include "estimator/pipeline.hpp"
+#include "tests/replay/ideal_clock_sinks.hpp"
 #include "tools/sim/lidar_registry.hpp"
 #include "tools/sim/scenario.hpp"
 #include "tools/sim/worlds.hpp"
@@ -41,18 +42,7 @@ RunResult run_livox(const std::string& scenario_name, const std::string& model, 
   livox::LivoxDecoder decoder(*livox::livox_model(model), livox::LivoxDecoderOptions{});
 
   std::vector<estimator::PipelineOutput> outputs;
-  drivers::DecoderSinks sinks;
-  // Ideal clocks: mapped time = sensor time (scenario seconds in ns).
-  sinks.on_scan = [&](const LidarScan& s) {
-    LidarScan copy = s;
-    copy.start.mapped = MappedTime(s.start.sensor.ns);
-    pipeline.add_scan(copy);
-  };
-  sinks.on_imu = [&](const ImuSample& m) {
-    ImuSample copy = m;
-    copy.stamp.mapped = MappedTime(m.stamp.sensor.ns);
-    pipeline.add_imu(copy);
-  };
+  const drivers::DecoderSinks sinks = test::ideal_clock_sinks(pipeline);
   sim::SimOutputs out;
   out.on_datagram = [&](sim::SimDatagram&& d) {
     decoder.on_packet({d.payload, d.host_time_ns, d.dst_port}, sinks);

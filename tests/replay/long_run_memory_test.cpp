@@ -19,6 +19,7 @@
 #include "daemon/worker_pool.hpp"
 #include "drivers/ouster/ouster_factory.hpp"
 #include "estimator/pipeline.hpp"
+#include "tests/replay/ideal_clock_sinks.hpp"
 #include "tests/support/data_dir.hpp"
 #include "tools/sim/lidar_registry.hpp"
 #include "tools/sim/scenario.hpp"
@@ -71,18 +72,7 @@ TEST(LongRunMemory, FifteenMinuteDriveStaysBounded) {
   po.runner = &pool;
   estimator::LioPipeline pipeline(po);
 
-  // Ideal clocks: mapped time = sensor time (clock mapping has its own tests).
-  drivers::DecoderSinks sinks;
-  sinks.on_scan = [&](const LidarScan& s) {
-    LidarScan copy = s;
-    copy.start.mapped = MappedTime(s.start.sensor.ns);
-    pipeline.add_scan(copy);
-  };
-  sinks.on_imu = [&](const ImuSample& m) {
-    ImuSample copy = m;
-    copy.stamp.mapped = MappedTime(m.stamp.sensor.ns);
-    pipeline.add_imu(copy);
-  };
+  const drivers::DecoderSinks sinks = test::ideal_clock_sinks(pipeline);
   sim::SimOutputs out;
   out.on_datagram = [&](sim::SimDatagram&& d) {
     decoder->on_packet({d.payload, d.host_time_ns, d.dst_port}, sinks);
