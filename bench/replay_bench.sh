@@ -7,7 +7,7 @@
 #   bench/replay_bench.sh memory [BUILD_DIR]   15 min of the Mid-360 room: RSS and map bytes over
 #                                              time (needs ~3 GB in $TMPDIR for the capture)
 #
-# BUILD_DIR defaults to build/release (a Release build: -O2, no -ffast-math, no -march=native).
+# BUILD_DIR defaults to build/release (a Release build: -O2, portable, IEEE-exact).
 # Per-frame figures are wall time and CPU time over all threads (unaffected by other processes); run on an
 # otherwise idle machine for wall figures that mean something.
 set -euo pipefail

@@ -1,7 +1,7 @@
 #pragma once
 // Subcommands of the single `livod` binary. Each add_*_command() registers one subcommand on the
 // root app; its callback stores the process exit code in the context. A subcommand exists only
-// when it works end to end (no "not implemented" paths).
+// when it works end to end.
 
 namespace CLI {
 class App;

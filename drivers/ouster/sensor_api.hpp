@@ -1,7 +1,7 @@
 #pragma once
 // The parts of the Ouster HTTP API livod needs (FW >= 2.4; sensor-protocols.md §3.5). Older
-// firmware only answers the TCP 7501 text protocol, which is not implemented: record the metadata
-// with the vendor tools once and pass the file instead.
+// firmware only answers the TCP 7501 text protocol, which livod does not speak (an open item):
+// record the metadata with the vendor tools once and pass the file instead.
 
 #include <chrono>
 #include <cstdint>
