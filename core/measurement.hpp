@@ -26,12 +26,12 @@ struct LidarScan {
   Stamp start;
   std::uint32_t sequence = 0;  // scans counted from 0 by the assembler that produced it
 
-  std::vector<float> x, y, z;                 // metres, LiDAR frame
-  std::vector<float> intensity;               // reflectivity / intensity as the sensor reports it
-  std::vector<std::uint16_t> ring;            // laser / line / beam index
-  std::vector<std::uint8_t> return_index;     // 0 = first/strongest, 1 = second, ...
-  std::vector<std::int32_t> t_offset_ns;      // ns from `start` (a scan spans < 2.1 s)
-  std::vector<std::uint8_t> valid;            // 0 = no return / filtered out, kept for layout
+  std::vector<float> x, y, z;              // metres, LiDAR frame
+  std::vector<float> intensity;            // reflectivity / intensity as the sensor reports it
+  std::vector<std::uint16_t> ring;         // laser / line / beam index
+  std::vector<std::uint8_t> return_index;  // 0 = first/strongest, 1 = second, ...
+  std::vector<std::int32_t> t_offset_ns;   // ns from `start` (a scan spans < 2.1 s)
+  std::vector<std::uint8_t> valid;         // 0 = no return / filtered out, kept for layout
 
   [[nodiscard]] std::size_t size() const { return x.size(); }
   [[nodiscard]] bool empty() const { return x.empty(); }
@@ -68,6 +68,13 @@ struct LidarScan {
     return_index.push_back(preturn);
     t_offset_ns.push_back(poffset_ns);
     valid.push_back(pvalid ? 1 : 0);
+  }
+
+  // Time of the latest point after `start` (points need not be in time order).
+  [[nodiscard]] std::int32_t span_ns() const {
+    std::int32_t last = 0;
+    for (const auto t : t_offset_ns) last = t > last ? t : last;
+    return last;
   }
 
   [[nodiscard]] Eigen::Vector3f point(std::size_t i) const { return {x[i], y[i], z[i]}; }

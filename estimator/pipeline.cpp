@@ -71,9 +71,9 @@ void LioPipeline::add_imu(const ImuSample& sample) {
   }
 }
 
-void LioPipeline::add_scan(const LidarScan& scan) {
+void LioPipeline::add_scan(LidarScan scan) {
   if (initializer_.done()) {
-    sync_.add_scan(scan);
+    sync_.add_scan(std::move(scan));
     return;
   }
   ++init_counters_.scans_in;

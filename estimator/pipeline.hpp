@@ -90,7 +90,8 @@ class LioPipeline {
   ~LioPipeline();
 
   void add_imu(const ImuSample& sample);
-  void add_scan(const LidarScan& scan);
+  // Taken by value (it is queued): move a scan in when the caller is done with it.
+  void add_scan(LidarScan scan);
   // Runs every group whose scan end is covered by IMU data.
   void process(const std::function<void(const PipelineOutput&)>& on_output);
 

@@ -127,26 +127,50 @@ class MalformedMessages {
   std::uint64_t count_ = 0;
 };
 
-class BagImuSource final : public ReplaySource {
+// What every bag topic source shares: the cursor, the malformed-message policy and reading the
+// next message through a decoder that may throw FormatError.
+class BagTopicSource : public ReplaySource {
+ public:
+  BagTopicSource(BagTopic topic, std::string where)
+      : topic_(std::move(topic)), malformed_(std::move(where)) {}
+
+  std::optional<std::int64_t> peek_time() override { return topic_.peek_time(); }
+  void finish(const drivers::DecoderSinks& /*sinks*/) override {}
+  [[nodiscard]] std::optional<double> fraction_done() const override {
+    return topic_.fraction_done();
+  }
+
+ protected:
+  // The next message, once `decode(message)` has read it; nullopt at the end or when the message
+  // is malformed (counted, skipped).
+  template <class Decode>
+  std::optional<rb::BagMessage> take(Decode&& decode) {
+    auto m = topic_.take();
+    if (!m) return std::nullopt;
+    try {
+      decode(*m);
+    } catch (const FormatError& e) {
+      malformed_.failed(e);
+      return std::nullopt;
+    }
+    malformed_.ok();
+    return m;
+  }
+
+  BagTopic topic_;
+  MalformedMessages malformed_;
+};
+
+class BagImuSource final : public BagTopicSource {
  public:
   BagImuSource(BagTopic topic, const DatasetConfig& dataset, std::string where)
-      : topic_(std::move(topic)),
-        malformed_(std::move(where)),
+      : BagTopicSource(std::move(topic), std::move(where)),
         accel_scale_(dataset.accel_unit == CanUnit::g ? kStandardGravity : 1.0),
         gyro_scale_(dataset.gyro_unit == CanUnit::deg_s ? M_PI / 180.0 : 1.0) {}
 
-  std::optional<std::int64_t> peek_time() override { return topic_.peek_time(); }
-
   void deliver(const drivers::DecoderSinks& sinks) override {
-    const auto m = topic_.take();
+    const auto m = take([this](const rb::BagMessage& message) { message.decode_into(msg_); });
     if (!m) return;
-    try {
-      m->decode_into(msg_);
-    } catch (const FormatError& e) {
-      malformed_.failed(e);
-      return;
-    }
-    malformed_.ok();
     ImuSample s;
     s.stamp.sensor = SensorTime(msg_.header.stamp.to_ns());
     s.stamp.host = HostTime(m->time_ns);
@@ -162,65 +186,45 @@ class BagImuSource final : public ReplaySource {
     if (sinks.on_imu) sinks.on_imu(s);
   }
 
-  void finish(const drivers::DecoderSinks& /*sinks*/) override {}
-
   [[nodiscard]] std::string summary() const override {
     return fmt::format(
         "bag sensor_msgs/Imu: messages {}, malformed {}, non-finite samples dropped {}",
         topic_.messages(), malformed_.count(), non_finite_);
   }
-  [[nodiscard]] std::optional<double> fraction_done() const override {
-    return topic_.fraction_done();
-  }
 
  private:
-  BagTopic topic_;
-  MalformedMessages malformed_;
   double accel_scale_;
   double gyro_scale_;
   rb::sensor_msgs::Imu msg_;
   std::uint64_t non_finite_ = 0;
 };
 
-class BagCloudSource final : public ReplaySource {
+class BagCloudSource final : public BagTopicSource {
  public:
   BagCloudSource(BagTopic topic, const DatasetConfig& dataset, std::string where)
-      : topic_(std::move(topic)),
-        malformed_(std::move(where)),
+      : BagTopicSource(std::move(topic), std::move(where)),
         dataset_(dataset),
         livox_(is_livox_custom_msg(topic_.type())) {}
 
-  std::optional<std::int64_t> peek_time() override { return topic_.peek_time(); }
-
   void deliver(const drivers::DecoderSinks& sinks) override {
-    const auto m = topic_.take();
-    if (!m) return;
     bool ok = false;
-    try {
+    const auto m = take([&](const rb::BagMessage& message) {
       if (livox_) {
-        decode_custom_msg(*m, livox_msg_);
+        decode_custom_msg(message, livox_msg_);
         ok = custom_msg_to_scan(livox_msg_, scan_, stats_);
       } else {
-        m->decode_into(cloud_msg_);
+        message.decode_into(cloud_msg_);
         ok = point_cloud_to_scan(cloud_msg_, dataset_, scratch_, scan_, stats_);
       }
-    } catch (const FormatError& e) {
-      malformed_.failed(e);
-      return;
-    }
-    malformed_.ok();
-    if (!ok) return;
+    });
+    if (!m || !ok) return;
     scan_.sequence = sequence_++;
     // A recorder receives a scan once it is complete: back-date the record time to the scan
     // start, as packet decoders stamp scans with the receive time of their first packet.
-    std::int32_t last = 0;
-    for (const auto t : scan_.t_offset_ns) last = std::max(last, t);
-    scan_.start.host = HostTime(m->time_ns - last);
+    scan_.start.host = HostTime(m->time_ns - scan_.span_ns());
     scan_.start.mapped = MappedTime(scan_.start.host.ns);
     if (sinks.on_scan) sinks.on_scan(scan_);
   }
-
-  void finish(const drivers::DecoderSinks& /*sinks*/) override {}
 
   [[nodiscard]] std::string summary() const override {
     return fmt::format(
@@ -229,13 +233,8 @@ class BagCloudSource final : public ReplaySource {
         topic_.type(), topic_.messages(), stats_.empty_messages, malformed_.count(),
         stats_.bad_time_messages, stats_.points, stats_.invalid_points, stats_.dropped_points);
   }
-  [[nodiscard]] std::optional<double> fraction_done() const override {
-    return topic_.fraction_done();
-  }
 
  private:
-  BagTopic topic_;
-  MalformedMessages malformed_;
   DatasetConfig dataset_;
   bool livox_;
   rb::livox_ros_driver::CustomMsg livox_msg_;
@@ -247,22 +246,14 @@ class BagCloudSource final : public ReplaySource {
 };
 
 // Raw sensor packets recorded by a ROS driver (ouster_ros/PacketMsg) through the packet decoder.
-class BagPacketSource final : public ReplaySource {
+class BagPacketSource final : public BagTopicSource {
  public:
-  BagPacketSource(BagTopic topic, std::unique_ptr<drivers::LidarDecoder> decoder)
-      : topic_(std::move(topic)), decoder_(std::move(decoder)) {}
-
-  std::optional<std::int64_t> peek_time() override { return topic_.peek_time(); }
+  BagPacketSource(BagTopic topic, std::unique_ptr<drivers::LidarDecoder> decoder, std::string where)
+      : BagTopicSource(std::move(topic), std::move(where)), decoder_(std::move(decoder)) {}
 
   void deliver(const drivers::DecoderSinks& sinks) override {
-    const auto m = topic_.take();
+    const auto m = take([this](const rb::BagMessage& message) { message.decode_into(msg_); });
     if (!m) return;
-    try {
-      m->decode_into(msg_);
-    } catch (const FormatError&) {
-      ++malformed_;  // the packet decoder counts what it cannot decode; this never reached it
-      return;
-    }
     const std::span<const std::byte> payload(reinterpret_cast<const std::byte*>(msg_.buf.data()),
                                              msg_.buf.size());
     // The recorded message has no UDP port; decoders that share a port tell packets by size.
@@ -276,18 +267,13 @@ class BagPacketSource final : public ReplaySource {
     return fmt::format(
         "bag ouster_ros/PacketMsg: messages {} ({} malformed); {}: packets {} (lidar {}, imu {}), "
         "scans {} ({} incomplete), points {}, sequence gaps {}, decode errors {}",
-        topic_.messages(), malformed_, decoder_->model_name(), c.packets, c.lidar_packets,
+        topic_.messages(), malformed_.count(), decoder_->model_name(), c.packets, c.lidar_packets,
         c.imu_packets, c.scans, c.incomplete_scans, c.points, c.sequence_gaps, c.decode_errors);
-  }
-  [[nodiscard]] std::optional<double> fraction_done() const override {
-    return topic_.fraction_done();
   }
 
  private:
-  BagTopic topic_;
   std::unique_ptr<drivers::LidarDecoder> decoder_;
   rb::ouster_ros::PacketMsg msg_;
-  std::uint64_t malformed_ = 0;
 };
 
 }  // namespace
@@ -311,7 +297,7 @@ std::unique_ptr<ReplaySource> make_bag_source(const std::filesystem::path& file,
   }
   if (type == "ouster_ros/PacketMsg") {
     if (!decoder) throw Error(where + ": raw packets need a packet LiDAR driver (ouster)");
-    return std::make_unique<BagPacketSource>(std::move(cursor), std::move(decoder));
+    return std::make_unique<BagPacketSource>(std::move(cursor), std::move(decoder), where);
   }
   throw Error(where +
               ": replay reads sensor_msgs/Imu, sensor_msgs/PointCloud2, "

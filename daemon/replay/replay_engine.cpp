@@ -50,7 +50,6 @@ struct ReplayedSensor {
   bool imu_usable =
       false;  // its IMU samples may feed the clock (an enabled internal IMU, or an IMU)
   drivers::DecoderSinks sinks;
-  LidarScan scan;  // reused copy whose mapped stamp is set
   std::uint64_t scans = 0;
   std::uint64_t imu_samples = 0;
 };
@@ -204,10 +203,11 @@ void Replay::select_sensors() {
     };
     r->sinks.on_scan = [this, self](const LidarScan& scan) {
       if (!self->scans_to_estimator) return;
-      self->scan = scan;
-      self->clock->map_scan(self->scan);
+      // The decoder reuses its scan: one copy, stamped and moved into the estimator's queue.
+      LidarScan copy = scan;
+      self->clock->map_scan(copy);
       ++self->scans;
-      pipeline_->add_scan(self->scan);
+      pipeline_->add_scan(std::move(copy));
     };
     sensors_.push_back(std::move(r));
   }

@@ -19,8 +19,7 @@ struct CovPoint {
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // world frame
 };
 
-// Members are ordered for matching: what the association gates read (is_plane, normal, d,
-// center, radius) shares the first cache line; the 288-byte covariance comes last.
+// A fitted plane with its full covariance (the voxel map keeps the reduced MapPlane below).
 struct Plane {
   bool is_plane = false;
   int points = 0;

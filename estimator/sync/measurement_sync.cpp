@@ -1,13 +1,11 @@
 #include "estimator/sync/measurement_sync.hpp"
 
-#include <algorithm>
+#include <utility>
 
 namespace livod::estimator {
 
 MappedTime MeasurementSync::scan_end(const LidarScan& scan) {
-  std::int32_t last = 0;
-  for (const auto t : scan.t_offset_ns) last = std::max(last, t);
-  return scan.start.mapped + Nanoseconds(last);
+  return scan.start.mapped + Nanoseconds(scan.span_ns());
 }
 
 void MeasurementSync::start(MappedTime t) {
@@ -32,7 +30,7 @@ void MeasurementSync::add_imu(const ImuSample& sample) {
   }
 }
 
-void MeasurementSync::add_scan(const LidarScan& scan) {
+void MeasurementSync::add_scan(LidarScan scan) {
   ++counters_.scans_in;
   if (scan.empty()) return;
   const MappedTime end = scan_end(scan);
@@ -41,7 +39,7 @@ void MeasurementSync::add_scan(const LidarScan& scan) {
     ++counters_.scans_out_of_order;
     return;
   }
-  scans_.push_back(QueuedScan{scan, end});
+  scans_.push_back(QueuedScan{std::move(scan), end});
   if (scans_.size() > params_.max_queued_scans) {
     scans_.pop_front();
     ++counters_.scans_queue_overflow;

@@ -57,8 +57,9 @@ class MeasurementSync {
   [[nodiscard]] bool started() const { return started_; }
 
   void add_imu(const ImuSample& sample);
-  // Empty scans are ignored. The scan end is its latest point time.
-  void add_scan(const LidarScan& scan);
+  // Empty scans are ignored. The scan end is its latest point time. Taken by value: a caller that
+  // no longer needs its copy moves it into the queue.
+  void add_scan(LidarScan scan);
 
   // Moves the next complete group into `group` (IMU data reaches its update time); false when no
   // group is complete yet.

@@ -13,7 +13,7 @@ inline drivers::DecoderSinks ideal_clock_sinks(estimator::LioPipeline& pipeline)
   sinks.on_scan = [&pipeline](const LidarScan& s) {
     LidarScan copy = s;
     copy.start.mapped = MappedTime(s.start.sensor.ns);
-    pipeline.add_scan(copy);
+    pipeline.add_scan(std::move(copy));
   };
   sinks.on_imu = [&pipeline](const ImuSample& m) {
     ImuSample copy = m;

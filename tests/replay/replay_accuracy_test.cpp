@@ -55,19 +55,11 @@ TEST_P(ReplayAccuracy, MeetsTheIssueTargets) {
     GTEST_SKIP() << c.scenario << ": LiDAR model " << scenario.lidars.front().model
                  << " is not simulated yet";
   }
-  const auto folder = test::simulate(scenario, c.duration_s, c.scenario);
-  const auto out = test::temp_dir(std::string(c.scenario) + "-replay");
-  const auto result = test::replay(test::with_estimator(folder, c.estimator), out);
-  const auto& s = result.summary;
-  ASSERT_GT(s.frames, 0U) << "no pose; IMU init: " << s.init_status;
-  const auto ev = test::evaluate(result.trajectory, folder / "groundtruth.txt");
-  const double path = ev.gt.path_length();
-  std::printf(
-      "[accuracy] %s: %.0f s, %zu poses, path %.1f m, ATE RMSE %.4f m (%.4f %% of path), max "
-      "%.4f m; degenerate frames %llu; frame p50 %.2f ms p99 %.2f ms; %.0f points/scan\n",
-      c.scenario, c.duration_s, s.frames, path, ev.ape.rmse, 100.0 * ev.ape.rmse / path, ev.ape.max,
-      static_cast<unsigned long long>(s.degenerate_frames), s.frame_ms.p50, s.frame_ms.p99,
-      s.used_points.p50);
+  const auto run = test::simulate_replay_evaluate(scenario, c.duration_s, c.estimator);
+  const auto& s = run.result.summary;
+  ASSERT_GT(s.frames, 0U);
+  const auto& ev = run.eval;
+  const double path = run.path_m;
   RecordProperty("ate_rmse_m", std::to_string(ev.ape.rmse));
   RecordProperty("path_m", std::to_string(path));
 

@@ -71,20 +71,12 @@ double number_after(const std::string& status, const std::string& key) {
 TEST(ReplayHdl32e, StreetVehicleOnTheInternalImuMeetsTheStreetTarget) {
   const sim::Scenario scenario = sim::make_scenario("street_vehicle_hdl32e");
   ASSERT_TRUE(test::scenario_runnable(scenario));
-  const auto folder = test::simulate(scenario, kStreetDurationS, "street_vehicle_hdl32e");
-  const auto out = test::temp_dir("street_vehicle_hdl32e-replay");
-  const auto result = test::replay(test::with_estimator(folder, ""), out);
-  const auto& s = result.summary;
-  ASSERT_GT(s.frames, 0U) << "no pose; IMU init: " << s.init_status;
-  const auto ev = test::evaluate(result.trajectory, folder / "groundtruth.txt");
-  const double path = ev.gt.path_length();
-  std::printf(
-      "[accuracy] street_vehicle_hdl32e: %.0f s, %zu poses, path %.1f m, ATE RMSE %.4f m (%.4f %% "
-      "of path), max %.4f m; degenerate frames %llu; frame p50 %.2f ms p99 %.2f ms; %.0f "
-      "points/scan; IMU init: %s\n",
-      kStreetDurationS, s.frames, path, ev.ape.rmse, 100.0 * ev.ape.rmse / path, ev.ape.max,
-      static_cast<unsigned long long>(s.degenerate_frames), s.frame_ms.p50, s.frame_ms.p99,
-      s.used_points.p50, s.init_status.c_str());
+  const auto run = test::simulate_replay_evaluate(scenario, kStreetDurationS, "");
+  const auto& s = run.result.summary;
+  ASSERT_GT(s.frames, 0U);
+  const auto& folder = run.folder;
+  const auto& ev = run.eval;
+  const double path = run.path_m;
   RecordProperty("ate_rmse_m", std::to_string(ev.ape.rmse));
   RecordProperty("path_m", std::to_string(path));
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -72,6 +73,18 @@ inline eval::EvalResult evaluate(const std::filesystem::path& trajectory,
   return eval::evaluate_files(trajectory, groundtruth, eval::EvalOptions{});
 }
 
+// A scenario simulated to a folder, replayed with `estimator` settings appended to its config
+// (with_estimator) and evaluated against its ground truth; prints one "[accuracy]" line.
+struct ScenarioReplay {
+  std::filesystem::path folder;
+  daemon::replay::ReplayResult result;
+  eval::EvalResult eval;
+  double path_m = 0.0;  // ground-truth distance travelled
+};
+
+inline ScenarioReplay simulate_replay_evaluate(const sim::Scenario& scenario, double duration_s,
+                                               const std::string& estimator);
+
 inline std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream ss;
@@ -92,6 +105,29 @@ inline std::filesystem::path with_estimator(const std::filesystem::path& folder,
       generated.rfind("estimator:", 0) == 0 || generated.find("\nestimator:") != std::string::npos;
   if (!settings.empty() && !has_estimator) f << "estimator: " << settings << "\n";
   return out;
+}
+
+inline ScenarioReplay simulate_replay_evaluate(const sim::Scenario& scenario, double duration_s,
+                                               const std::string& estimator) {
+  ScenarioReplay r;
+  r.folder = simulate(scenario, duration_s, scenario.name);
+  r.result = replay(with_estimator(r.folder, estimator), temp_dir(scenario.name + "-replay"));
+  const auto& s = r.result.summary;
+  if (s.frames == 0) {
+    ADD_FAILURE() << scenario.name << ": no pose; IMU init: " << s.init_status;
+    return r;
+  }
+  r.eval = evaluate(r.result.trajectory, r.folder / "groundtruth.txt");
+  r.path_m = r.eval.gt.path_length();
+  std::printf(
+      "[accuracy] %s: %.0f s, %zu poses, path %.1f m, ATE RMSE %.4f m (%.4f %% of path), max "
+      "%.4f m; degenerate frames %llu; frame p50 %.2f ms p99 %.2f ms; %.0f points/scan; IMU "
+      "init: %s\n",
+      scenario.name.c_str(), duration_s, s.frames, r.path_m, r.eval.ape.rmse,
+      100.0 * r.eval.ape.rmse / r.path_m, r.eval.ape.max,
+      static_cast<unsigned long long>(s.degenerate_frames), s.frame_ms.p50, s.frame_ms.p99,
+      s.used_points.p50, s.init_status.c_str());
+  return r;
 }
 
 }  // namespace livod::test

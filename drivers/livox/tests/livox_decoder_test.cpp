@@ -27,6 +27,16 @@ std::array<LivoxPoint, 96> points(float x) {
   return pts;
 }
 
+// One Mid-360 point packet: 96 points over 475 us starting at t_ns.
+std::vector<std::byte> mid360_packet(std::int64_t t_ns, int udp_cnt,
+                                     const std::array<LivoxPoint, 96>& pts) {
+  Sdk2Header h;
+  h.timestamp_ns = static_cast<std::uint64_t>(t_ns);
+  h.time_interval_100ns = 4750;
+  h.udp_cnt = static_cast<std::uint16_t>(udp_cnt);
+  return encode_sdk2_points(h, pts);
+}
+
 TEST(LivoxDecoder, Mid360StreamIsCutIntoPeriodAlignedScansAndCountsGaps) {
   LivoxDecoder dec(*livox_model("MID-360"), LivoxDecoderOptions{});
   Collected out;
@@ -37,11 +47,7 @@ TEST(LivoxDecoder, Mid360StreamIsCutIntoPeriodAlignedScansAndCountsGaps) {
   int sent = 0;
   for (int k = 0; k < 730; ++k) {
     if (k == 100) continue;
-    Sdk2Header h;
-    h.timestamp_ns = static_cast<std::uint64_t>(t0 + k * 480'000LL);
-    h.time_interval_100ns = 4750;
-    h.udp_cnt = static_cast<std::uint16_t>(k);
-    const auto bytes = encode_sdk2_points(h, pts);
+    const auto bytes = mid360_packet(t0 + k * 480'000LL, k, pts);
     dec.on_packet({bytes, t0 + k * 480'000LL + 600'000, 56301}, out.sinks());
     ++sent;
   }
@@ -105,11 +111,7 @@ TEST(LivoxDecoder, ALatePacketIsDroppedWithoutSplittingTheScan) {
   const auto pts = points(3.0F);
   const std::int64_t t0 = 1'097'120'000;  // packet 5 ends at 1.099995 s, packet 6 starts at 1.1 s
   auto send = [&](int k) {
-    Sdk2Header h;
-    h.timestamp_ns = static_cast<std::uint64_t>(t0 + k * 480'000LL);
-    h.time_interval_100ns = 4750;
-    h.udp_cnt = static_cast<std::uint16_t>(k);
-    const auto bytes = encode_sdk2_points(h, pts);
+    const auto bytes = mid360_packet(t0 + k * 480'000LL, k, pts);
     dec.on_packet({bytes, t0 + k * 480'000LL + 600'000, 56301}, out.sinks());
   };
   for (int k = 0; k < 20; ++k) {
@@ -132,11 +134,7 @@ TEST(LivoxDecoder, AClockResetRestartsTheTimeline) {
   Collected out;
   const auto pts = points(3.0F);
   auto send = [&](std::int64_t t, int k) {
-    Sdk2Header h;
-    h.timestamp_ns = static_cast<std::uint64_t>(t);
-    h.time_interval_100ns = 4750;
-    h.udp_cnt = static_cast<std::uint16_t>(k);
-    const auto bytes = encode_sdk2_points(h, pts);
+    const auto bytes = mid360_packet(t, k, pts);
     dec.on_packet({bytes, t, 56301}, out.sinks());
   };
   for (int k = 0; k < 400; ++k) send(50'000'000'000LL + k * 480'000LL, k);
