@@ -31,7 +31,7 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/live_source.hpp"
+#include "drivers/capture/live_source.hpp"
 #include "io/udp_socket.hpp"
 
 namespace {

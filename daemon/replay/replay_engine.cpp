@@ -13,7 +13,7 @@
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/map_accumulator.hpp"
 #include "daemon/replay/progress.hpp"
-#include "daemon/replay/sensor_clock.hpp"
+#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/replay/sources.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
 #include "daemon/worker_pool.hpp"
@@ -44,7 +44,7 @@ struct ReplayedSensor {
   std::string role;
   std::string file;
   std::unique_ptr<ReplaySource> source;
-  std::unique_ptr<SensorClockMapper> clock;
+  std::unique_ptr<runtime::SensorClockMapper> clock;
   bool scans_to_estimator = false;
   bool imu_to_estimator = false;
   bool imu_usable =
@@ -86,7 +86,7 @@ int estimator_lidar(const LivodConfig& config) {
   return -1;
 }
 
-ClockSummary clock_summary(const SensorClockMapper& mapper) {
+ClockSummary clock_summary(const runtime::SensorClockMapper& mapper) {
   const ClockDomainStats s = mapper.domain().stats();
   ClockSummary c;
   c.mode = std::string(to_string(s.mode));
@@ -191,7 +191,7 @@ void Replay::select_sensors() {
     r->imu_usable = sensor_kind(s.driver) == SensorKind::imu || s.imu.enabled;
     r->role = is_lidar && is_body ? "lidar + body imu" : is_lidar ? "lidar" : "body imu";
     r->source = make_source(s, recording->replay, recording->ports);
-    r->clock = std::make_unique<SensorClockMapper>(s);
+    r->clock = std::make_unique<runtime::SensorClockMapper>(s);
     ReplayedSensor* self = r.get();
     // The sinks run only inside run()'s loop, once pipeline_ exists.
     r->sinks.on_imu = [this, self](const ImuSample& sample) {

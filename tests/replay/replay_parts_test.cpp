@@ -14,7 +14,7 @@
 #include "daemon/replay/cloud_conversion.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/map_accumulator.hpp"
-#include "daemon/replay/sensor_clock.hpp"
+#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/replay/timing_report.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
 #include "tests/support/data_dir.hpp"
@@ -349,7 +349,7 @@ TEST(ReplayParts, ClockMappingAddsTheOffsetOnceAndPrefersImu) {
   sensor.name = "l";
   sensor.driver = daemon::Driver::livox_sdk2;
   sensor.time_offset_s = 0.002;
-  daemon::replay::SensorClockMapper mapper(sensor);
+  daemon::runtime::SensorClockMapper mapper(sensor);
   EXPECT_EQ(mapper.domain().config().mode, ClockMode::free_running);
   // A sensor clock 52.25 s behind the host, IMU at 200 Hz with a constant 100 us delay.
   const std::int64_t host0 = 1'700'000'000'000'000'000;
@@ -381,7 +381,7 @@ TEST(ReplayParts, ClockMappingAddsTheOffsetOnceAndPrefersImu) {
   // dataset_* sensors default to direct: header stamps are the timeline.
   sensor.driver = daemon::Driver::dataset_imu;
   sensor.time_offset_s = 0.0;
-  daemon::replay::SensorClockMapper direct(sensor);
+  daemon::runtime::SensorClockMapper direct(sensor);
   ImuSample s;
   s.stamp.sensor = SensorTime(123'456'789);
   s.stamp.host = HostTime(host0);

@@ -1,4 +1,4 @@
-#include "drivers/ouster_reinit.hpp"
+#include "drivers/ouster/reinit.hpp"
 
 #include <memory>
 #include <utility>

@@ -1,6 +1,6 @@
 // Stream health: rate over a sliding window, STALE detection, per-stream snapshots.
 
-#include "drivers/health.hpp"
+#include "drivers/capture/health.hpp"
 
 #include <gtest/gtest.h>
 

@@ -19,11 +19,11 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/live_source.hpp"
+#include "drivers/capture/live_source.hpp"
 #include "drivers/ouster/metadata.hpp"
 #include "drivers/ouster/ouster_decoder.hpp"
-#include "drivers/ouster_reinit.hpp"
-#include "drivers/pcap_pacer.hpp"
+#include "drivers/ouster/reinit.hpp"
+#include "drivers/capture/pcap_pacer.hpp"
 #include "io/pcap.hpp"
 #include "tests/support/data_dir.hpp"
 

@@ -14,8 +14,8 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/live_source.hpp"
-#include "drivers/pcap_pacer.hpp"
+#include "drivers/capture/live_source.hpp"
+#include "drivers/capture/pcap_pacer.hpp"
 #include "drivers/registry.hpp"
 #include "io/pcap.hpp"
 #include "io/udp_socket.hpp"

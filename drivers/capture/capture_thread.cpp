@@ -1,4 +1,4 @@
-#include "drivers/capture_thread.hpp"
+#include "drivers/capture/capture_thread.hpp"
 
 #include <pthread.h>
 #include <sched.h>

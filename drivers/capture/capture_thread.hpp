@@ -17,7 +17,7 @@
 #include <thread>
 
 #include "core/spsc_ring.hpp"
-#include "drivers/packet_ring.hpp"
+#include "drivers/capture/packet_ring.hpp"
 #include "io/udp_socket.hpp"
 
 namespace livod::drivers {

@@ -1,4 +1,4 @@
-#include "drivers/livox_supervisor.hpp"
+#include "drivers/livox/supervisor.hpp"
 
 #include <poll.h>
 

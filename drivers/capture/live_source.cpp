@@ -1,4 +1,4 @@
-#include "drivers/live_source.hpp"
+#include "drivers/capture/live_source.hpp"
 
 #include <stdexcept>
 #include <utility>

@@ -1,4 +1,4 @@
-#include "drivers/pcap_pacer.hpp"
+#include "drivers/capture/pcap_pacer.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -15,10 +15,10 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/live_source.hpp"
+#include "drivers/capture/live_source.hpp"
 #include "drivers/livox/packets.hpp"
 #include "drivers/livox/sdk1_control.hpp"
-#include "drivers/livox_supervisor.hpp"
+#include "drivers/livox/supervisor.hpp"
 #include "drivers/registry.hpp"
 #include "io/udp_socket.hpp"
 

@@ -19,8 +19,8 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/health.hpp"
-#include "drivers/live_source.hpp"
+#include "drivers/capture/health.hpp"
+#include "drivers/capture/live_source.hpp"
 #include "drivers/livox/device.hpp"
 #include "io/udp_socket.hpp"
 

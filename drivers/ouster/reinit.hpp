@@ -22,10 +22,10 @@
 #include <thread>
 
 #include "core/time.hpp"
-#include "drivers/health.hpp"
+#include "drivers/capture/health.hpp"
 #include "drivers/ouster/metadata.hpp"
 #include "drivers/ouster/ouster_decoder.hpp"
-#include "drivers/stream_consumer.hpp"
+#include "drivers/capture/stream_consumer.hpp"
 
 namespace livod::drivers {
 

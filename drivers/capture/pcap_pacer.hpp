@@ -15,7 +15,7 @@
 #include <string>
 
 #include "core/time.hpp"
-#include "drivers/packet_ring.hpp"
+#include "drivers/capture/packet_ring.hpp"
 
 namespace livod::drivers {
 

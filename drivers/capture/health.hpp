@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "core/time.hpp"
-#include "drivers/capture_thread.hpp"
+#include "drivers/capture/capture_thread.hpp"
 #include "drivers/lidar_decoder.hpp"
-#include "drivers/stream_consumer.hpp"
+#include "drivers/capture/stream_consumer.hpp"
 
 namespace livod::drivers {
 

@@ -1,8 +1,8 @@
-#include "daemon/replay/sensor_clock.hpp"
+#include "daemon/runtime/sensor_clock.hpp"
 
 #include <algorithm>
 
-namespace livod::daemon::replay {
+namespace livod::daemon::runtime {
 namespace {
 
 // An IMU stream silent for this long (receive time) no longer feeds the clock model; the scans
@@ -64,4 +64,4 @@ void SensorClockMapper::map_scan(LidarScan& scan) {
   scan.start.mapped = with_offset(t);
 }
 
-}  // namespace livod::daemon::replay
+}  // namespace livod::daemon::runtime

@@ -6,8 +6,8 @@
 //   sensor --UDP--> UdpStream: capture thread --PacketRing--> StreamConsumer (scheduler thread)
 //                                                              -> LidarDecoder -> scans / IMU
 //
-// Sensor supervision sits beside it: LivoxSupervisor (drivers/livox_supervisor.hpp) brings Livox
-// devices up and reconnects them; OusterReinitHandler (drivers/ouster_reinit.hpp) re-reads Ouster
+// Sensor supervision sits beside it: LivoxSupervisor (drivers/livox/supervisor.hpp) brings Livox
+// devices up and reconnects them; OusterReinitHandler (drivers/ouster/reinit.hpp) re-reads Ouster
 // metadata when the sensor re-initialises.
 //
 // Threads: the constructor starts one capture thread per stream. consumer(), update_health() and
@@ -21,11 +21,11 @@
 #include <vector>
 
 #include "core/time.hpp"
-#include "drivers/capture_thread.hpp"
-#include "drivers/health.hpp"
+#include "drivers/capture/capture_thread.hpp"
+#include "drivers/capture/health.hpp"
 #include "drivers/lidar_decoder.hpp"
-#include "drivers/packet_ring.hpp"
-#include "drivers/stream_consumer.hpp"
+#include "drivers/capture/packet_ring.hpp"
+#include "drivers/capture/stream_consumer.hpp"
 #include "io/udp_socket.hpp"
 
 namespace livod::drivers {

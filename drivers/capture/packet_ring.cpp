@@ -1,4 +1,4 @@
-#include "drivers/packet_ring.hpp"
+#include "drivers/capture/packet_ring.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -17,7 +17,7 @@
 #include "core/measurement.hpp"
 #include "daemon/config/config.hpp"
 
-namespace livod::daemon::replay {
+namespace livod::daemon::runtime {
 
 // ClockConfig (YAML) -> ClockDomainConfig. `auto` is free_running for sensors decoded from their
 // packets or frames (their stamps are a sensor clock), direct for dataset_* recordings (their
@@ -46,4 +46,4 @@ class SensorClockMapper {
   HostTime last_imu_host_;
 };
 
-}  // namespace livod::daemon::replay
+}  // namespace livod::daemon::runtime

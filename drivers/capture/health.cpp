@@ -1,4 +1,4 @@
-#include "drivers/health.hpp"
+#include "drivers/capture/health.hpp"
 
 #include <algorithm>
 #include <cinttypes>

@@ -1,4 +1,4 @@
-#include "drivers/stream_consumer.hpp"
+#include "drivers/capture/stream_consumer.hpp"
 
 #include <stdexcept>
 #include <utility>

@@ -1,7 +1,7 @@
 // PacketRing: fixed-size payload slots over the core SPSC ring; overrun accounting, truncation,
 // slot reuse, and a two-thread stress run (also built under ThreadSanitizer).
 
-#include "drivers/packet_ring.hpp"
+#include "drivers/capture/packet_ring.hpp"
 
 #include <gtest/gtest.h>
 

@@ -14,7 +14,7 @@
 
 #include "core/time.hpp"
 #include "drivers/lidar_decoder.hpp"
-#include "drivers/packet_ring.hpp"
+#include "drivers/capture/packet_ring.hpp"
 
 namespace livod::drivers {
 
