@@ -44,7 +44,8 @@ function(livod_add_test name)
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} livod_test_support GTest::gtest GTest::gtest_main
                                         livod_warnings)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 120
-    PROPERTIES LABELS "${ARG_LABELS}" ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR}")
+    PROPERTIES LABELS "${ARG_LABELS}" ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR}"
+               ENVIRONMENT_MODIFICATION "LIVOD_SOURCE_DIR=set:${PROJECT_SOURCE_DIR}")
 endfunction()
 
 # livod_glob_library(NAME DIR [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])

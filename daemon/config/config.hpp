@@ -226,6 +226,8 @@ struct HealthConfig {
 struct RealtimeConfig {
   int capture_priority = 0;
   int scheduler_priority = 0;
+  int capture_cpu = -1;      // pin every capture thread to this CPU; -1 = any
+  int scheduler_cpu = -1;    // pin the scheduler thread to this CPU; -1 = any
   bool lock_memory = false;  // mlockall(MCL_CURRENT | MCL_FUTURE)
 };
 

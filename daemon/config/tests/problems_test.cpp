@@ -571,3 +571,78 @@ TEST(ConfigProblems, HostileYamlIsReportedNotThrown) {
 
 }  // namespace
 }  // namespace livod::daemon
+
+namespace livod::daemon {
+namespace {
+
+std::vector<std::string> not_implemented(const std::string& yaml) {
+  const ConfigResult r = load_config_from_string(yaml, "test.yaml");
+  std::vector<std::string> paths;
+  for (const auto& p : r.problems) {
+    if (p.kind == ProblemKind::not_implemented) {
+      EXPECT_EQ(p.severity, Severity::error) << p.message;
+      paths.push_back(p.path);
+    }
+  }
+  return paths;
+}
+
+const char* kLidar = R"(body_frame: os1.imu
+sensors:
+  - name: os1
+    driver: ouster
+    model: OS1-64
+    source: {udp: {sensor_address: 192.168.1.10}}
+    imu: {enabled: true}
+    extrinsic: {translation: [0, 0, 0.03], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+
+// What livod cannot run is an error at check-config time, never a silent no-op at run time.
+TEST(ConfigImplemented, WhatCannotRunIsAnError) {
+  EXPECT_TRUE(not_implemented(kLidar).empty());
+
+  const std::string camera = std::string(kLidar) + R"(  - name: cam
+    driver: aravis
+    source: {device: {camera_id: ""}}
+    camera: {width: 640, height: 512, intrinsics: [500, 500, 320, 256]}
+    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  EXPECT_EQ(not_implemented(camera), std::vector<std::string>{"sensors[1].enabled"});
+  // Disabled, the camera keeps its calibration in the file and is no problem.
+  std::string disabled = camera;
+  disabled.replace(disabled.find("    driver: aravis"), 0, "    enabled: false\n");
+  EXPECT_TRUE(not_implemented(disabled).empty());
+
+  const std::string two_lidars = std::string(kLidar) + R"(  - name: vlp
+    driver: velodyne
+    model: VLP-16
+    source: {udp: {}}
+    extrinsic: {translation: [0, 0, 0.3], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  EXPECT_EQ(not_implemented(two_lidars), std::vector<std::string>{"sensors[1].enabled"});
+
+  const std::string extra_imu = std::string(kLidar) + R"(  - name: can
+    driver: can_imu
+    source: {replay: {file: imu.log}}
+    can: {decoder: sbg}
+    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  EXPECT_EQ(not_implemented(extra_imu), std::vector<std::string>{"sensors[1].enabled"});
+
+  const std::string live_can = R"(body_frame: can
+sensors:
+  - name: vlp
+    driver: velodyne
+    model: VLP-16
+    source: {udp: {}}
+    extrinsic: {translation: [0, 0, 0.3], rotation: {rpy_deg: [0, 0, 0]}}
+  - name: can
+    driver: can_imu
+    source: {device: {interface: can0}}
+    can: {decoder: sbg}
+)";
+  EXPECT_EQ(not_implemented(live_can), std::vector<std::string>{"sensors[1].source"});
+}
+
+}  // namespace
+}  // namespace livod::daemon
