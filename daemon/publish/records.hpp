@@ -55,8 +55,9 @@ struct Frames {
 };
 
 // How mapped times (livod's timeline) become UNIX times in the messages: unix = mapped + offset.
-// Live, mapped time is CLOCK_MONOTONIC and the runtime sets CLOCK_REALTIME - CLOCK_MONOTONIC (and
-// refreshes it, e.g. at the health period, so that NTP corrections follow). In replay, mapped time
+// Live, mapped time is CLOCK_MONOTONIC and the runtime sets CLOCK_REALTIME - CLOCK_MONOTONIC
+// (RealtimeToMonotonic::offset_ns(), core/realtime_offset.hpp) and refreshes it, e.g. at the health
+// period, so that NTP corrections follow. In replay, mapped time
 // is the recording's clock, already UNIX time for pcap and bag recordings: offset 0.
 struct TimeBase {
   std::int64_t mapped_to_unix_ns = 0;

@@ -108,6 +108,8 @@ TEST(LcmFingerprint, BotCorePoseEqualsLibbot2ByTheAlgorithm) {
   const std::uint64_t expected = fingerprint(base_hash(libbot2_pose_members()));
   EXPECT_EQ(::bot_core::pose_t::getHash(), expected)
       << std::hex << "generated 0x" << ::bot_core::pose_t::getHash() << ", libbot2 0x" << expected;
+  // The value docs/lcm.md gives subscribers.
+  EXPECT_EQ(expected, 0x2e16efb052b0105eULL);
 }
 
 TEST(LcmFingerprint, BotCorePoseEqualsWhatLcmGenComputesForLibbot2) {
