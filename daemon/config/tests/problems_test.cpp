@@ -171,6 +171,48 @@ TEST(ConfigProblems, InvalidValues) {
                "logging.level");
 }
 
+TEST(ConfigProblems, LcmChannels) {
+  only_problem(load(minimal_config() + "outputs: {lcm: {channels: {pose: livod_pose}}}\n"),
+               ProblemKind::invalid_value, "outputs.lcm.channels.pose");
+  only_problem(load(minimal_config() + "outputs: {lcm: {channels: {health: \"\"}}}\n"),
+               ProblemKind::invalid_value, "outputs.lcm.channels.health");
+  only_problem(load(minimal_config() + "outputs: {lcm: {channels: {pose: [A]}}}\n"),
+               ProblemKind::wrong_type, "outputs.lcm.channels.pose");
+  {
+    const auto p = only_problem(load(minimal_config() + "outputs: {lcm: {channels: {posee: X}}}\n"),
+                                ProblemKind::unknown_key, "outputs.lcm.channels.posee");
+    EXPECT_NE(p.message.find("did you mean 'pose'"), std::string::npos) << p.message;
+  }
+  only_problem(load(minimal_config() + "outputs: {lcm: {publish_bot_core_pose: maybe}}\n"),
+               ProblemKind::wrong_type, "outputs.lcm.publish_bot_core_pose");
+  {
+    // Two enabled outputs on one channel.
+    const auto p = only_problem(
+        load(minimal_config() + "outputs: {lcm: {channels: {bot_core_pose: LIVOD_POSE}}}\n"),
+        ProblemKind::inconsistent, "outputs.lcm.channels.bot_core_pose");
+    EXPECT_NE(p.message.find("pose channel"), std::string::npos) << p.message;
+  }
+  // ... unless one of them is switched off.
+  EXPECT_TRUE(load(minimal_config() +
+                   "outputs: {lcm: {channels: {cloud: LIVOD_POSE}, publish_cloud: false}}\n")
+                  .problems.empty());
+  // LCM's 63-byte limit, on the channel when it was given, else once on the suffix.
+  only_problem(
+      load(minimal_config() + "outputs: {lcm: {channels: {pose: " + std::string(64, 'P') + "}}}\n"),
+      ProblemKind::out_of_range, "outputs.lcm.channels.pose");
+  {
+    const auto p = only_problem(
+        load(minimal_config() + "outputs: {lcm: {channel_suffix: " + std::string(50, 'S') + "}}\n"),
+        ProblemKind::out_of_range, "outputs.lcm.channel_suffix");
+    EXPECT_NE(p.message.find("LIVOD_POSE_IMU"), std::string::npos) << p.message;
+  }
+  // Every bad value at once.
+  const auto all = load(minimal_config() +
+                        "outputs: {lcm: {channels: {pose: x, health: LIVOD_CLOUD, cloud: y}, "
+                        "publish_cloud: true, cloud_max_points: 5}}\n");
+  EXPECT_EQ(all.problems.size(), 3u) << dump(all);  // pose, cloud, cloud_max_points
+}
+
 TEST(ConfigProblems, DuplicateSensorNames) {
   const auto result = load(minimal_config() + R"(  - name: lidar
     driver: ouster
