@@ -5,8 +5,9 @@
 namespace livod::io {
 
 std::string format_loss(const InputLoss& loss) {
-  std::string out = loss.file + ": at byte offset " + std::to_string(loss.byte_offset) + ": " +
-                    loss.reason + "; skipped ";
+  std::string out = loss.file + ": ";
+  if (loss.byte_offset) out += "at byte offset " + std::to_string(*loss.byte_offset) + ": ";
+  out += loss.reason + "; skipped ";
   std::string parts;
   const auto add = [&parts](const std::string& part) {
     parts += (parts.empty() ? "" : ", ") + part;
@@ -32,6 +33,17 @@ void InputLossLog::add(InputLoss loss) {
   if (loss.seconds) seconds_ += *loss.seconds;
   last_listed_ = entries_.size() < kMaxEntries;
   if (last_listed_) entries_.push_back(std::move(loss));
+}
+
+void InputLossLog::merge(const InputLossLog& other) {
+  for (const InputLoss& loss : other.entries_) {
+    if (entries_.size() < kMaxEntries) entries_.push_back(loss);
+  }
+  count_ += other.count_;
+  bytes_ += other.bytes_;
+  records_ += other.records_;
+  seconds_ += other.seconds_;
+  last_listed_ = false;
 }
 
 void InputLossLog::set_last_seconds(double seconds) {

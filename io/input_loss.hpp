@@ -14,7 +14,7 @@ namespace livod::io {
 
 struct InputLoss {
   std::string file;               // the recording (path or name given to the reader)
-  std::uint64_t byte_offset = 0;  // where the damaged stretch starts
+  std::optional<std::uint64_t> byte_offset;  // where the damaged stretch starts, when known
   std::uint64_t bytes = 0;    // bytes skipped (0 when not known, e.g. inside a compressed chunk)
   std::uint64_t records = 0;  // records skipped: pcap records, bag messages, log lines
   bool records_estimated = false;  // `records` is estimated from the average record size
@@ -35,6 +35,8 @@ class InputLossLog {
   void add(InputLoss loss);
   // Sets the time span of the last loss (known only once reading resumes after it).
   void set_last_seconds(double seconds);
+  // Adds another reader's losses (entries up to the cap, totals all).
+  void merge(const InputLossLog& other);
 
   [[nodiscard]] const std::vector<InputLoss>& entries() const { return entries_; }
   [[nodiscard]] bool empty() const { return count_ == 0; }
