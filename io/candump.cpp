@@ -389,7 +389,7 @@ bool CandumpReader::next(CanFrame& frame) {
       s.open_loss->unit = "lines";
       s.open_loss->reason = message;
     }
-    s.open_loss->bytes = s.offset - s.open_loss->byte_offset;
+    s.open_loss->bytes = s.offset - s.open_loss->byte_offset.value_or(line_offset);
     ++s.open_loss->records;
   }
 }
