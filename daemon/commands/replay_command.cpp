@@ -2,7 +2,9 @@
 // candump logs, ROS1 bags) through the decoders, clock domains and LIO estimator as fast as
 // possible, single-threaded and deterministic, and writes OUTDIR/trajectory.txt (TUM), map.pcd,
 // timing.txt, timing.json and frames.csv (docs/replay.md). Exit codes: 0 done, 1 a configuration
-// with errors (every problem is printed) or a recording that cannot be replayed, 2 usage.
+// with errors (every problem is printed) or a recording that cannot be replayed, 2 usage, 3 the
+// replay ran but part of a recording could not be read (every lost stretch is printed; the
+// outputs cover only what was read) and --accept-partial-input was not given.
 
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
@@ -14,13 +16,16 @@
 
 #include "daemon/commands/command.hpp"
 #include "daemon/config/load_config.hpp"
+#include "daemon/preflight.hpp"
 #include "daemon/replay/progress.hpp"
 #include "daemon/replay/replay_engine.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon {
 namespace {
 
 constexpr int kExitFailure = 1;
+constexpr int kExitPartialInput = 3;
 
 struct ReplayArgs {
   std::string config;
@@ -31,7 +36,56 @@ struct ReplayArgs {
   int threads = -1;
   double map_cell_m = 0.2;
   std::size_t map_max_points = 2'000'000;
+  bool accept_partial_input = false;
 };
+
+// Everything the console must say about map.pcd that the numbers alone would hide: an empty map,
+// points dropped for the budget or outside the cell grid.
+void print_map_warnings(const replay::ReplaySummary& s) {
+  if (s.exported_dropped > 0) {
+    fmt::print(stderr,
+               "livod replay: warning: map.pcd reached its budget of {} points: {} later points "
+               "in new cells were dropped, so the map covers only the first part of the run "
+               "(raise --map-max-points or --map-cell)\n",
+               s.exported_budget, s.exported_dropped);
+  }
+  if (s.exported_outside > 0) {
+    fmt::print(stderr,
+               "livod replay: warning: {} points lay outside the map.pcd cell grid (+-{:.6g} m "
+               "per axis at this --map-cell) and were not mapped\n",
+               s.exported_outside, s.exported_grid_half_extent_m);
+  }
+  if (s.frames > 0 && s.exported_points == 0) {
+    fmt::print(stderr, "livod replay: warning: map.pcd is empty although {} poses were estimated\n",
+               s.frames);
+  }
+}
+
+// Prints every lost stretch; returns the exit status the losses call for.
+int report_losses(const io::InputLossLog& losses, bool accepted) {
+  if (losses.empty()) return 0;
+  for (const auto& loss : losses.entries()) {
+    fmt::print(stderr, "livod replay: input lost: {}\n", io::format_loss(loss));
+  }
+  if (losses.not_listed() > 0) {
+    fmt::print(stderr, "livod replay: input lost: {} more damaged stretches not listed\n",
+               losses.not_listed());
+  }
+  fmt::print(stderr,
+             "livod replay: {} damaged stretch(es) of the recordings were skipped ({} bytes, {} "
+             "records known lost, {:.3f} s of recording known missing): the outputs cover only "
+             "what could be read\n",
+             losses.count(), losses.bytes(), losses.records(), losses.seconds());
+  if (accepted) {
+    fmt::print(stderr, "livod replay: partial input accepted (--accept-partial-input)\n");
+    return 0;
+  }
+  fmt::print(stderr,
+             "livod replay: failing because input was lost (exit status {}); "
+             "--accept-partial-input accepts a partial replay\n",
+             kExitPartialInput);
+  return kExitPartialInput;
+}
 
 void print_result(const replay::ReplayResult& r) {
   const auto& s = r.summary;
@@ -58,7 +112,13 @@ void print_result(const replay::ReplayResult& r) {
 }
 
 int run(const ReplayArgs& args) {
-  const ConfigResult loaded = load_config(args.config);
+  ConfigResult loaded = load_config(args.config);
+  if (loaded.ok()) {
+    // The same file checks as check-config; the recordings are opened by the replay itself.
+    for (auto& p : check_config_files(loaded.config, /*open_recordings=*/false)) {
+      loaded.problems.push_back(std::move(p));
+    }
+  }
   for (const auto& problem : loaded.problems) {
     fmt::print(stderr, "{}\n", format_problem(loaded.source, problem));
   }
@@ -79,7 +139,8 @@ int run(const ReplayArgs& args) {
     const replay::ReplayResult result = replay::run_replay(loaded.config, options);
     for (const auto& note : result.notes) fmt::print(stderr, "livod replay: note: {}\n", note);
     print_result(result);
-    return 0;
+    print_map_warnings(result.summary);
+    return report_losses(result.losses, args.accept_partial_input);
   } catch (const std::exception& e) {
     fmt::print(stderr, "livod replay: {}\n", e.what());
     return kExitFailure;
@@ -113,6 +174,9 @@ void add_replay_command(CLI::App& app, CommandContext& ctx) {
   cmd->add_option("--map-max-points", args->map_max_points, "map.pcd point budget")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("--accept-partial-input", args->accept_partial_input,
+                "Exit 0 even when part of a recording could not be read (the losses are still "
+                "printed); without it such a replay exits with status 3");
   cmd->callback([&ctx, args] { ctx.exit_code = run(*args); });
 }
 

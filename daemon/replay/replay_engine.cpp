@@ -13,9 +13,9 @@
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/map_accumulator.hpp"
 #include "daemon/replay/progress.hpp"
-#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/replay/sources.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
+#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/worker_pool.hpp"
 #include "estimator/pipeline.hpp"
 
@@ -328,6 +328,10 @@ ReplayResult Replay::run() {
   result_.summary.estimator_s = estimator_s;
   write_text_file(result_.timing_text, format_timing_text(result_.summary));
   write_text_file(result_.timing_json, format_timing_json(result_.summary));
+  for (const auto& s : sensors_) {
+    result_.losses.merge(s->source->input_losses());
+    for (auto& note : s->source->notes()) result_.notes.push_back(std::move(note));
+  }
   return std::move(result_);
 }
 
@@ -361,6 +365,9 @@ ReplaySummary Replay::summarise(double wall_s) const {
   s.map_bytes_peak = std::max(map_bytes_peak_, s.map.bytes);
   s.exported_points = map_.size();
   s.exported_dropped = map_.dropped_full();
+  s.exported_outside = map_.dropped_outside();
+  s.exported_grid_half_extent_m = map_.grid_half_extent_m();
+  s.exported_budget = options_.map_max_points;
   for (const auto& r : sensors_) {
     SensorSummary sensor;
     sensor.name = r->config->name;

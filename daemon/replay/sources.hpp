@@ -16,6 +16,7 @@
 
 #include "daemon/config/config.hpp"
 #include "drivers/lidar_decoder.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon::replay {
 
@@ -33,6 +34,11 @@ class ReplaySource {
   [[nodiscard]] virtual std::string summary() const = 0;
   // Fraction of the recording consumed when the source can tell (bags), for the progress line.
   [[nodiscard]] virtual std::optional<double> fraction_done() const { return std::nullopt; }
+  // What the source could not read of its recording: damaged stretches its reader skipped,
+  // messages that did not decode. Complete once peek_time() has returned nullopt.
+  [[nodiscard]] virtual io::InputLossLog input_losses() const { return {}; }
+  // Remarks on how the recording was read (a bag index rebuilt by scanning, ...).
+  [[nodiscard]] virtual std::vector<std::string> notes() const { return {}; }
 };
 
 // The source for one sensor's recording. `ports`: the UDP destination ports to keep from a pcap
