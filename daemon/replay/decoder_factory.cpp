@@ -78,12 +78,12 @@ std::string ouster_model_mismatch(const SensorConfig& sensor,
   std::string configured_beams;
   if (configured) configured_beams = configured->substr(configured->rfind('-') + 1);
   if (recorded && configured && *recorded != *configured) {
-    return "the configuration says model " + *configured + " but the metadata describes an " +
+    return "model " + *configured + " contradicts the metadata, which describes an " +
            metadata.prod_line + " (" + std::to_string(beams) + " beams)";
   }
   if (configured && !configured_beams.empty() && configured_beams != std::to_string(beams)) {
-    return "the configuration says model " + *configured + " (" + configured_beams +
-           " beams) but the metadata has " + std::to_string(beams) + " beams";
+    return "model " + *configured + " (" + configured_beams +
+           " beams) contradicts the metadata, which has " + std::to_string(beams) + " beams";
   }
   return {};
 }

@@ -65,7 +65,8 @@ TEST(Preflight, ModelContradictingTheMetadataIsAnError) {
   for (const std::string model : {"OS1-16", "OS0-128"}) {
     const auto problems = preflight(ouster_pcap_config(model, good_metadata()));
     ASSERT_EQ(problems.size(), 1u) << model;
-    EXPECT_NE(problems[0].message.find("the configuration says model " + model), std::string::npos)
+    EXPECT_NE(problems[0].message.find("model " + model + " contradicts the metadata"),
+              std::string::npos)
         << problems[0].message;
   }
 }
