@@ -335,7 +335,14 @@ drivers::ouster::SensorMetadata bag_ouster_metadata(const std::filesystem::path&
   query.topics = candidates;
   auto cursor = bag.read(query);
   const auto message = cursor.next();
-  if (!message) throw Error(bag.source() + ": topic " + candidates[0] + " has no message");
+  if (!message) {
+    io::InputLossLog losses = bag.losses();
+    losses.merge(cursor.losses());
+    throw Error(bag.source() + ": topic " + candidates[0] + " has no message" +
+                (losses.empty()
+                     ? std::string()
+                     : " (the bag is damaged: " + io::format_loss(losses.entries()[0]) + ")"));
+  }
   const auto text = message->as<rb::std_msgs::String>();
   return drivers::ouster::parse_metadata(text.data, bag.source() + " topic " + candidates[0]);
 }
