@@ -162,6 +162,9 @@ TEST(BadInputReplay, MapCellTooSmallForTheGridIsSaid) {
   expect_run(livod("replay -q --map-cell 1e-6 --config " + q(sim / "config.yaml") + " -o " +
                    q(dir / "out")),
              0, {"outside the map.pcd cell grid"});
+  expect_run(livod("replay -q --map-max-points 10 --config " + q(sim / "config.yaml") + " -o " +
+                   q(dir / "out2")),
+             0, {"map.pcd reached its budget of 10 points", "covers only the first part"});
 }
 
 TEST(BadInputReplay, MalformedOusterMetadataIsRefusedBeforeReplaying) {
