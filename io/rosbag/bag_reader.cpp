@@ -381,7 +381,20 @@ struct BagReader::Impl {
     std::uint64_t pos = first_record_pos;
     std::vector<std::byte> data;
     std::optional<std::int64_t> last_end_ns;
-    bool loss_open = false;
+    // A damaged stretch stays open until a chunk reads again: the records found inside it
+    // (connection and message records of a damaged uncompressed chunk) extend it rather than
+    // counting as stretches of their own.
+    InputLoss open;
+    bool is_open = false;
+    const auto close = [&](std::optional<std::int64_t> resume_ns) {
+      if (!is_open) return;
+      if (resume_ns && last_end_ns && *resume_ns >= *last_end_ns) {
+        open.seconds = static_cast<double>(*resume_ns - *last_end_ns) * 1e-9;
+      }
+      losses.add(std::move(open));
+      open = InputLoss{};
+      is_open = false;
+    };
     while (pos < src->size()) {
       try {
         const FileRecord r = read_record(pos);
@@ -391,10 +404,7 @@ struct BagReader::Impl {
           load_chunk_data(r, c, data);
           ChunkRecord chunk = scan_chunk(r.position, data);
           if (!chunk.scanned.empty()) {
-            if (loss_open && last_end_ns && chunk.start_ns >= *last_end_ns) {
-              losses.set_last_seconds(static_cast<double>(chunk.start_ns - *last_end_ns) * 1e-9);
-            }
-            loss_open = false;
+            close(chunk.start_ns);
             last_end_ns = chunk.end_ns;
             chunks.push_back(std::move(chunk));
           }
@@ -407,19 +417,23 @@ struct BagReader::Impl {
         pos = r.end();
       } catch (const FormatError& e) {
         const std::optional<std::uint64_t> resume = find_record(pos + 1);
-        InputLoss loss;
-        loss.file = source;
-        loss.byte_offset = pos;
-        loss.bytes = (resume ? *resume : src->size()) - pos;
-        loss.unit = "messages";
-        loss.reason = reason_of(e);
-        if (!resume) loss.reason += " (the file ends in the damage)";
-        losses.add(std::move(loss));
-        loss_open = resume.has_value();
-        if (!resume) break;
+        const std::uint64_t end = resume ? *resume : src->size();
+        if (!is_open) {
+          is_open = true;
+          open.file = source;
+          open.byte_offset = pos;
+          open.unit = "messages";
+          open.reason = reason_of(e);
+        }
+        open.bytes = end - open.byte_offset.value_or(pos);
+        if (!resume) {
+          open.reason += " (the file ends in the damage)";
+          break;
+        }
         pos = *resume;
       }
     }
+    close(std::nullopt);
   }
 
   // The first offset >= `from` where a chunk or connection record starts (its header parses,
