@@ -1,6 +1,6 @@
-#include <fmt/core.h>
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
+#include <fmt/core.h>
 
 #include "daemon/commands/command.hpp"
 
