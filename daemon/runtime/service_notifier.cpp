@@ -82,6 +82,15 @@ void ServiceNotifier::ready(HostTime now, const std::string& status) {
   send("READY=1\nSTATUS=" + status);
   last_ping_ = now;
   for (auto& w : watched_) w.at_last_ping = w.beats();
+  // Idle threads beat every 20 ms (capture) and 100 ms (scheduler, publisher): a ping interval
+  // close to that would be withheld now and then although nothing is stuck.
+  constexpr Nanoseconds kShortestSafeInterval{500'000'000};
+  if (watchdog_ && ping_interval() < kShortestSafeInterval) {
+    spdlog::warn(
+        "systemd watchdog: WatchdogSec={:.2f} s is too short for idle threads that beat "
+        "every 100 ms; use 2 s or more",
+        to_seconds(*watchdog_));
+  }
   if (watchdog_) {
     spdlog::info("systemd watchdog: {:.1f} s, pinged every {:.1f} s while {} thread(s) advance",
                  to_seconds(*watchdog_), to_seconds(ping_interval()), watched_.size());

@@ -9,14 +9,12 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
-#include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -24,6 +22,7 @@
 #include "daemon/config/sensor_models.hpp"
 #include "daemon/runtime/daemon.hpp"
 #include "tests/replay/sim_replay.hpp"
+#include "tests/runtime/fake_service_manager.hpp"
 #include "tests/runtime/udp_replayer.hpp"
 
 namespace livod {
@@ -31,59 +30,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-
-// What a service manager receives on NOTIFY_SOCKET, with the arrival times.
-class FakeServiceManager {
- public:
-  FakeServiceManager() {
-    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    EXPECT_GE(fd_, 0);
-    const std::string name = "livod-notify-test-" + std::to_string(::getpid());
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    // Abstract namespace: sun_path[0] = 0, spelled "@name" in NOTIFY_SOCKET.
-    name.copy(addr.sun_path + 1, sizeof(addr.sun_path) - 2);
-    const auto len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + name.size());
-    EXPECT_EQ(::bind(fd_, reinterpret_cast<const sockaddr*>(&addr), len), 0);
-    timeval tv{0, 50'000};
-    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
-    address_ = "@" + name;
-    reader_ = std::jthread([this](const std::stop_token& stop) {
-      char buf[4096];
-      while (!stop.stop_requested()) {
-        const ssize_t n = ::recv(fd_, buf, sizeof(buf), 0);
-        if (n <= 0) continue;
-        const std::lock_guard lock(mutex_);
-        messages_.push_back({Clock::now(), std::string(buf, static_cast<std::size_t>(n))});
-      }
-    });
-  }
-  ~FakeServiceManager() {
-    reader_.request_stop();
-    reader_.join();
-    ::close(fd_);
-  }
-  FakeServiceManager(const FakeServiceManager&) = delete;
-  FakeServiceManager& operator=(const FakeServiceManager&) = delete;
-
-  [[nodiscard]] const std::string& address() const { return address_; }
-
-  struct Message {
-    Clock::time_point at;
-    std::string text;
-  };
-  [[nodiscard]] std::vector<Message> messages() {
-    const std::lock_guard lock(mutex_);
-    return messages_;
-  }
-
- private:
-  int fd_ = -1;
-  std::string address_;
-  std::mutex mutex_;
-  std::vector<Message> messages_;
-  std::jthread reader_;
-};
+using test::FakeServiceManager;
 
 bool starts_with(const std::string& s, const std::string& prefix) {
   return s.rfind(prefix, 0) == 0;
