@@ -74,7 +74,11 @@ Nanoseconds ServiceNotifier::ping_interval() const {
 }
 
 void ServiceNotifier::send(const std::string& state) {
-  if (!send_(state)) spdlog::warn("sd_notify: could not send {}", state);
+  if (send_(state)) return;
+  // Logged once: NOTIFY_SOCKET names a socket nobody reads (a copied environment, not systemd).
+  if (send_failures_++ == 0) {
+    spdlog::warn("sd_notify: could not send to NOTIFY_SOCKET (further failures not logged)");
+  }
 }
 
 void ServiceNotifier::ready(HostTime now, const std::string& status) {
@@ -87,8 +91,8 @@ void ServiceNotifier::ready(HostTime now, const std::string& status) {
   constexpr Nanoseconds kShortestSafeInterval{500'000'000};
   if (watchdog_ && ping_interval() < kShortestSafeInterval) {
     spdlog::warn(
-        "systemd watchdog: WatchdogSec={:.2f} s is too short for idle threads that beat "
-        "every 100 ms; use 2 s or more",
+        "systemd watchdog: WatchdogSec={:.2f} s is below 1 s, too short for idle threads that "
+        "beat every 100 ms (pings may be withheld although nothing is stuck)",
         to_seconds(*watchdog_));
   }
   if (watchdog_) {

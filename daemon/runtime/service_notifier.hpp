@@ -84,6 +84,7 @@ class ServiceNotifier {
   bool withheld_logged_ = false;
   std::uint64_t pings_ = 0;
   std::uint64_t withheld_ = 0;
+  std::uint64_t send_failures_ = 0;
   std::string sent_status_;
   std::mutex status_mutex_;  // pending_status_ is written by the publisher thread
   std::string pending_status_;
