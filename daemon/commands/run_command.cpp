@@ -59,6 +59,7 @@ int run(const RunArgs& args, const CLI::App& root) {
     runtime::DaemonOptions options;
     options.bus = bus.get();
     options.threads = args.threads;
+    options.notify_systemd = true;  // READY/STATUS/WATCHDOG/STOPPING when run by systemd
     const runtime::DaemonResult r = runtime::run_daemon(config, options);
     for (const auto& s : r.sensor_summaries) spdlog::info("{}", s);
     const auto& p = r.publisher;
