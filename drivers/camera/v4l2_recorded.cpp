@@ -167,6 +167,7 @@ int RecordedV4l2Device::ioctl(int fd, unsigned long request, void* arg) {
       b->timestamp.tv_usec = (f.timestamp_ns % 1'000'000'000) / 1000;
       b->length = static_cast<std::uint32_t>(slot->memory.size());
       ++delivered_;
+      last_dequeue_ = std::chrono::steady_clock::now();
       return 0;
     }
     default:
@@ -185,14 +186,23 @@ void* RecordedV4l2Device::mmap(std::size_t length, int fd, off_t offset) {
 void RecordedV4l2Device::munmap(void* /*address*/, std::size_t /*length*/) {}
 
 int RecordedV4l2Device::poll(int fd, int timeout_ms) {
+  auto wait = std::chrono::nanoseconds(std::chrono::milliseconds(timeout_ms));
   {
     const std::lock_guard lock(mutex_);
     if (fd != open_fd_ || !plugged_) return -ENODEV;
     const bool queued =
         std::any_of(slots_.begin(), slots_.end(), [](const Slot& s) { return s.queued; });
-    if (streaming_ && queued && !pending_.empty()) return 1;
+    if (streaming_ && queued && !pending_.empty()) {
+      const auto due = last_dequeue_ + rec_.pace;
+      const auto now = std::chrono::steady_clock::now();
+      if (now >= due) return 1;
+      if (due - now < wait) {
+        std::this_thread::sleep_for(due - now);
+        return 1;
+      }
+    }
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
+  std::this_thread::sleep_for(wait);
   return 0;
 }
 

@@ -9,6 +9,7 @@
 // Thread-safe: the capture thread makes the V4L2 calls while a test thread unplugs, plugs and
 // reads what was set.
 
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -38,6 +39,8 @@ struct V4l2Recording {
   bool exposure_controls = true;      // EXPOSURE_AUTO / EXPOSURE_ABSOLUTE / GAIN exist
   std::int32_t exposure_100us = 100;  // initial EXPOSURE_ABSOLUTE
   bool auto_exposure = true;
+  // Minimum time between two dequeued buffers (a camera's frame period); 0 = as fast as asked.
+  std::chrono::nanoseconds pace{0};
   std::vector<RecordedBuffer> frames;
 };
 
@@ -84,6 +87,7 @@ class RecordedV4l2Device final : public V4l2Device {
   int open_fd_ = -1;
   int generation_ = 0;  // descriptors of an unplugged device stay dead
   std::size_t delivered_ = 0;
+  std::chrono::steady_clock::time_point last_dequeue_{};
   int opens_ = 0;
 };
 
