@@ -147,12 +147,13 @@ void DeviceThread::run(const std::stop_token& stop) {
                std::to_string(static_cast<double>(silence_ns) * 1e-9) + " s";
     }
     if (!reason.empty()) {
-      link_.close();
-      open_ = false;
+      // Reported before closing: releasing a vanished device can take a while.
       bump(published_.losses);
       publish(published_.state, DeviceState::kLost);
       set_error(std::move(reason));
-      next_open_ns = now + config_.reopen_interval.count();
+      link_.close();
+      open_ = false;
+      next_open_ns = host_now().ns + config_.reopen_interval.count();
     }
   }
 }
