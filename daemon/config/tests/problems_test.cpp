@@ -447,7 +447,7 @@ TEST(ConfigProblems, InconsistentEstimatorSettings) {
 TEST(ConfigProblems, NoLidarIsAnError) {
   const auto result = load(R"(body_frame: imu
 sensors:
-  - {name: imu, driver: serial_imu, source: {device: {path: /dev/ttyUSB0}}, serial: {protocol: vectornav_binary}}
+  - {name: imu, driver: serial_imu, source: {device: {path: /dev/ttyUSB0}}, serial: {protocol: xsens_mtdata2}}
 )");
   only_problem(result, ProblemKind::inconsistent, "sensors");
 }
