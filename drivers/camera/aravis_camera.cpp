@@ -349,7 +349,8 @@ void AravisCamera::open() {
   m.realtime.refresh();
   const std::int64_t now = host_now().ns;
   m.next_trigger_ns = now;
-  m.next_exposure_poll_ns = 0;  // read back at the first service()
+  m.exposure_known = false;
+  read_back(now);  // the first frames already carry the exposure
   m.next_ptp_check_ns = 0;
   {
     const std::lock_guard lock(m.status_mutex);
@@ -402,6 +403,27 @@ void AravisCamera::close() noexcept {
   }
 }
 
+void AravisCamera::read_back(std::int64_t now) {
+  Impl& m = *impl_;
+  GError* err = nullptr;
+  const double us = arv_camera_get_exposure_time(m.camera, &err);
+  if (err == nullptr && us > 0.0) {
+    m.exposure = Nanoseconds(static_cast<std::int64_t>(us * 1e3 + 0.5));
+    m.exposure_known = true;
+    stats_.set_exposure(m.exposure);
+  }
+  g_clear_error(&err);
+  if (arv_camera_is_gain_available(m.camera, nullptr)) {
+    const double g = arv_camera_get_gain(m.camera, &err);
+    if (err == nullptr) {
+      m.gain = g;
+      stats_.set_gain(g);
+    }
+    g_clear_error(&err);
+  }
+  m.next_exposure_poll_ns = now + config_.exposure_poll.count();
+}
+
 bool AravisCamera::service() {
   Impl& m = *impl_;
   if (m.control_lost.load(std::memory_order_relaxed)) {
@@ -430,22 +452,7 @@ bool AravisCamera::service() {
   }
   if (now >= m.next_exposure_poll_ns &&
       (m.auto_exposure || !m.exposure_known || m.next_exposure_poll_ns == 0)) {
-    const double us = arv_camera_get_exposure_time(m.camera, &err);
-    if (err == nullptr && us > 0.0) {
-      m.exposure = Nanoseconds(static_cast<std::int64_t>(us * 1e3 + 0.5));
-      m.exposure_known = true;
-      stats_.set_exposure(m.exposure);
-    }
-    g_clear_error(&err);
-    if (arv_camera_is_gain_available(m.camera, nullptr)) {
-      const double g = arv_camera_get_gain(m.camera, &err);
-      if (err == nullptr) {
-        m.gain = g;
-        stats_.set_gain(g);
-      }
-      g_clear_error(&err);
-    }
-    m.next_exposure_poll_ns = now + config_.exposure_poll.count();
+    read_back(now);
   }
   if (config_.trigger == TriggerMode::kSoftware && config_.frame_rate_hz &&
       now >= m.next_trigger_ns) {

@@ -90,6 +90,8 @@ class AravisCamera final : public CameraBackend {
 
  private:
   struct Impl;
+  void read_back(std::int64_t now);  // exposure and gain features
+
   AravisCameraConfig config_;
   std::unique_ptr<Impl> impl_;
   std::string loss_reason_;
