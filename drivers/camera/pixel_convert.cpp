@@ -1,8 +1,10 @@
 #include "drivers/camera/pixel_convert.hpp"
 
 #include <cstring>
+#include <exception>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 namespace livod::camera {
 namespace {
@@ -28,6 +30,34 @@ int bytes_per_wire_pixel(WireFormat f) {
       return 0;
   }
   return 0;
+}
+
+// Width and height from a JPEG's frame header (SOFn), without decoding: a corrupt frame that
+// claims another size must not make the decoder allocate for it. nullopt when there is none.
+std::optional<std::pair<int, int>> jpeg_dimensions(std::span<const std::byte> b) {
+  const auto at = [&](std::size_t i) { return static_cast<unsigned>(b[i]); };
+  if (b.size() < 4 || at(0) != 0xFF || at(1) != 0xD8) return std::nullopt;  // SOI
+  std::size_t i = 2;
+  while (i + 4 <= b.size()) {
+    if (at(i) != 0xFF) return std::nullopt;
+    const unsigned marker = at(i + 1);
+    if (marker == 0xFF) {  // fill byte
+      ++i;
+      continue;
+    }
+    const std::size_t length = (at(i + 2) << 8) | at(i + 3);
+    const bool sof =
+        marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (sof) {
+      if (i + 9 > b.size() || length < 7) return std::nullopt;
+      const int height = static_cast<int>((at(i + 5) << 8) | at(i + 6));
+      const int width = static_cast<int>((at(i + 7) << 8) | at(i + 8));
+      return std::make_pair(width, height);
+    }
+    if (length < 2) return std::nullopt;
+    i += 2 + length;
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -145,11 +175,14 @@ ConvertStatus convert_image(const WireImage& in, cv::Mat& out) {
                           const_cast<std::byte*>(in.bytes.data()));
     const int flags = (to == PixelFormat::kMono8 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR) |
                       cv::IMREAD_IGNORE_ORIENTATION;
+    const auto dims = jpeg_dimensions(in.bytes);
+    if (!dims) return ConvertStatus::kDecodeFailed;
+    if (dims->first != in.width || dims->second != in.height) return ConvertStatus::kSizeMismatch;
     const uchar* slot = out.data;
     cv::Mat decoded = out;  // a header: decoding writes into the slot when the size matches
     try {
       cv::imdecode(encoded, flags, &decoded);
-    } catch (const cv::Exception&) {
+    } catch (const std::exception&) {  // cv::Exception, or bad_alloc on a corrupt frame
       return ConvertStatus::kDecodeFailed;
     }
     if (decoded.empty()) return ConvertStatus::kDecodeFailed;

@@ -6,6 +6,7 @@
 #include <linux/videodev2.h>
 
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -348,6 +349,32 @@ TEST(V4l2Recorded, ExposureIsSetReadBackAndChangedWhileStreaming) {
   auto dev2 = std::make_shared<RecordedV4l2Device>(rec);
   V4l2Camera cam2(cfg, dev2);
   EXPECT_THROW(cam2.open(), Error);
+}
+
+}  // namespace
+}  // namespace livod::camera
+
+namespace livod::camera {
+namespace {
+
+TEST(V4l2Recorded, CorruptOrWrongSizeMjpegFramesAreCountedNotDecoded) {
+  const auto images = euroc_frames();
+  auto rec = recording(images, V4L2_PIX_FMT_MJPEG);
+  cv::Mat big;
+  cv::resize(images[0], big, {images[0].cols * 2, images[0].rows * 2});
+  std::vector<std::uint8_t> big_jpeg;
+  cv::imencode(".jpg", big, big_jpeg);
+  auto garbage = rec.frames[0].bytes;
+  for (std::size_t i = 200; i < garbage.size(); i += 7) garbage[i] ^= 0x5A;
+  rec.frames.push_back({big_jpeg, 2, 5'100'000'000, kMonoSoe});                        // size
+  rec.frames.push_back({{0xFF, 0xD8, 0xFF, 0xC0, 0x00}, 3, 5'150'000'000, kMonoSoe});  // truncated
+  rec.frames.push_back({garbage, 4, 5'200'000'000, kMonoSoe});                         // corrupt
+  const RunResult r = run(rec, {});
+  EXPECT_EQ(r.counters.frames, 5u);
+  // The two good frames; the one twice the size and the truncated one are refused before
+  // decoding. libjpeg decodes a corrupted scan with artefacts rather than failing.
+  EXPECT_GE(r.counters.convert_errors, 2u);
+  EXPECT_EQ(r.frames.size() + r.counters.convert_errors, 5u);
 }
 
 }  // namespace
