@@ -54,10 +54,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   rec.formats = {wire};
   rec.width = w;
   rec.height = h;
-  // Frames: [flags byte][sequence byte][length byte][bytes...].
+  // Frames: [flags byte][sequence byte][length: 2 bytes LE, 0xFFFF = the full image][bytes...].
   std::size_t pos = 4;
   std::uint32_t seq = 0;
-  while (pos + 3 <= size && rec.frames.size() < 8) {
+  while (pos + 4 <= size && rec.frames.size() < 8) {
     RecordedBuffer b;
     const std::uint8_t f = data[pos];
     b.flags = (f & 1 ? V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC : 0) |
@@ -70,8 +70,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                              (wire == V4L2_PIX_FMT_GREY                                  ? 1
                               : wire == V4L2_PIX_FMT_BGR24 || wire == V4L2_PIX_FMT_RGB24 ? 3
                                                                                          : 2);
-    std::size_t n = data[pos + 2] == 255 ? full : data[pos + 2];
-    pos += 3;
+    const std::size_t len = data[pos + 2] | (static_cast<std::size_t>(data[pos + 3]) << 8);
+    std::size_t n = len == 0xFFFF ? full : len;
+    pos += 4;
     n = std::min(n, size - pos);
     b.bytes.assign(data + pos, data + pos + n);
     pos += n;

@@ -51,6 +51,33 @@ std::string check_bit_field(const CanBitField& f, int max_bytes) {
 
 std::int64_t extract_raw(std::span<const std::uint8_t> data, const CanBitField& f) {
   const int total_bits = static_cast<int>(data.size()) * kBitsPerByte;
+  if (data.size() >= 8 && f.length < kMaxLength) {
+    // Fast path for fields within the first 8 bytes: one 64-bit word, a shift and a mask. In the
+    // little-endian word bit b is DBC bit b; in the big-endian word DBC bit b of byte b / 8 sits
+    // at (b / 8) * 8 + 7 - b % 8 counted from the top.
+    const std::uint64_t mask = (std::uint64_t{1} << f.length) - 1;
+    std::uint64_t value = 0;
+    bool fits = false;
+    if (!f.big_endian && f.start_bit + f.length <= kMaxLength) {
+      std::uint64_t le = 0;
+      for (int i = 7; i >= 0; --i) le = (le << 8) | data[static_cast<std::size_t>(i)];
+      value = (le >> f.start_bit) & mask;
+      fits = true;
+    } else if (f.big_endian) {
+      const int msb_from_top =
+          (f.start_bit / kBitsPerByte) * kBitsPerByte + 7 - f.start_bit % kBitsPerByte;
+      if (msb_from_top + f.length <= kMaxLength) {
+        std::uint64_t be = 0;
+        for (int i = 0; i < 8; ++i) be = (be << 8) | data[static_cast<std::size_t>(i)];
+        value = (be >> (kMaxLength - msb_from_top - f.length)) & mask;
+        fits = true;
+      }
+    }
+    if (fits) {
+      if (f.is_signed && ((value >> (f.length - 1)) & 1U) != 0) value |= ~mask;
+      return static_cast<std::int64_t>(value);
+    }
+  }
   std::uint64_t value = 0;
   int pos = f.start_bit;
   for (int k = 0; k < f.length; ++k, pos = next_position(f, pos)) {
