@@ -67,10 +67,18 @@ void BM_CustomCan(benchmark::State& state) {
   livod::imu::CustomCanSpec spec;
   const std::uint32_t ids[3] = {0x178, 0x17C, 0x174};
   for (int a = 0; a < 3; ++a) {
-    spec.signals.push_back({static_cast<ImuAxis>(a), ids[a], {32, 16, false, false}, 0.000127465,
-                            -4.1768, ImuUnit::g});
-    spec.signals.push_back({static_cast<ImuAxis>(3 + a), ids[a], {0, 16, false, false}, 0.005,
-                            -163.84, ImuUnit::deg_s});
+    spec.signals.push_back({static_cast<ImuAxis>(a),
+                            ids[a],
+                            {32, 16, false, false},
+                            0.000127465,
+                            -4.1768,
+                            ImuUnit::g});
+    spec.signals.push_back({static_cast<ImuAxis>(3 + a),
+                            ids[a],
+                            {0, 16, false, false},
+                            0.005,
+                            -163.84,
+                            ImuUnit::deg_s});
   }
   spec.sample_id = 0x174;
   livod::imu::CustomCanDecoder d(spec);
@@ -88,7 +96,8 @@ void BM_XsensMtData2(benchmark::State& state) {
     x.packet_counter = static_cast<std::uint16_t>(k);
     x.sample_time_fine = static_cast<std::uint32_t>(25 * k);
     x.accel_m_s2 = Eigen::Vector3d(0.01 * k, -0.2, 9.81);
-    for (const auto b : livod::imu::encode_mtdata2_sample(x)) stream.push_back(static_cast<std::byte>(b));
+    for (const auto b : livod::imu::encode_mtdata2_sample(x))
+      stream.push_back(static_cast<std::byte>(b));
   }
   livod::imu::XsensMtData2Decoder d;
   std::size_t samples = 0;

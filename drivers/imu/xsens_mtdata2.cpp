@@ -181,8 +181,8 @@ void XsensMtData2Decoder::handle_mtdata2(std::span<const std::uint8_t> data,
   std::optional<std::uint16_t> counter;
   std::optional<std::uint32_t> ticks;
   std::optional<std::uint32_t> status;
-  Eigen::Vector3d accel;
-  Eigen::Vector3d gyro;
+  Eigen::Vector3d accel = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
   bool have_accel = false;
   bool have_gyro = false;
   bool accel_hr = false;
@@ -213,7 +213,7 @@ void XsensMtData2Decoder::handle_mtdata2(std::span<const std::uint8_t> data,
       ok = size == 4;
       if (ok) status = be32(value.data());
     } else if (type == kXdiAcceleration || (type == kXdiAccelerationHr && !have_accel)) {
-      Eigen::Vector3d v;
+      Eigen::Vector3d v = Eigen::Vector3d::Zero();
       ok = read_vec3(value, xdi, v);
       // The calibrated output wins over the high-rate one when both come in one message.
       if (ok && (!have_accel || accel_hr)) {
@@ -222,7 +222,7 @@ void XsensMtData2Decoder::handle_mtdata2(std::span<const std::uint8_t> data,
         have_accel = true;
       }
     } else if (type == kXdiRateOfTurn || (type == kXdiRateOfTurnHr && !have_gyro)) {
-      Eigen::Vector3d v;
+      Eigen::Vector3d v = Eigen::Vector3d::Zero();
       ok = read_vec3(value, xdi, v);
       if (ok && (!have_gyro || gyro_hr)) {
         gyro = v;
