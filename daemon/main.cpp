@@ -1,11 +1,14 @@
 // livod: one binary, subcommands for live operation, replay, decoding, simulation and tools.
 
 #include <fmt/core.h>
+#include <pthread.h>
 #include <CLI/CLI.hpp>
+
 #include <exception>
 
 #include "daemon/commands/command.hpp"
 #include "daemon/logging.hpp"
+#include "daemon/runtime/signals.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"livod - LiDAR-inertial-visual odometry daemon"};
@@ -25,7 +28,14 @@ int main(int argc, char** argv) {
   livod::daemon::add_eval_command(app, ctx);
 
   app.parse_complete_callback([&log_config] {
-    if (!livod::daemon::init_logging(log_config)) {
+    // The logger's thread starts here: with livod's signals blocked, so that it never takes a
+    // SIGTERM meant for the thread that handles it (daemon/runtime/signals.hpp).
+    sigset_t handled = livod::daemon::runtime::BlockedSignals::handled();
+    sigset_t previous;
+    pthread_sigmask(SIG_BLOCK, &handled, &previous);
+    const bool level_ok = livod::daemon::init_logging(log_config);
+    pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+    if (!level_ok) {
       fmt::print(stderr, "livod: unknown log level '{}', using info\n", log_config.level);
     }
   });

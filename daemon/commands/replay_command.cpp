@@ -1,13 +1,17 @@
-// `livod replay --config CONFIG.yaml -o OUTDIR [NAME=PATH | PATH]...`: replays recordings (pcap,
-// candump logs, ROS1 bags) through the decoders, clock domains and LIO estimator as fast as
-// possible, single-threaded and deterministic, and writes OUTDIR/trajectory.txt (TUM), map.pcd,
-// timing.txt, timing.json and frames.csv (docs/replay.md). Exit codes: 0 done, 1 a configuration
-// with errors (every problem is printed) or a recording that cannot be replayed, 2 usage.
+// `livod replay --config CONFIG.yaml -o OUTDIR [--realtime] [NAME=PATH | PATH]...`: replays
+// recordings (pcap, candump logs, ROS1 bags) through the decoders, clock domains and LIO estimator
+// - as fast as possible, single-threaded and deterministic (default): OUTDIR/trajectory.txt (TUM),
+//   map.pcd, timing.txt, timing.json and frames.csv (docs/replay.md);
+// - or --realtime: at the recorded pace through the daemon's threads and rings (the runtime of
+//   `livod run`): OUTDIR/trajectory.txt, map.pcd and timing.txt.
+// Exit codes: 0 done, 1 a configuration with errors (every problem is printed) or a recording that
+// cannot be replayed, 2 usage.
 
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
 
 #include <exception>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,6 +20,8 @@
 #include "daemon/config/load_config.hpp"
 #include "daemon/replay/progress.hpp"
 #include "daemon/replay/replay_engine.hpp"
+#include "daemon/runtime/daemon.hpp"
+#include "daemon/runtime/signals.hpp"
 
 namespace livod::daemon {
 namespace {
@@ -31,6 +37,7 @@ struct ReplayArgs {
   int threads = -1;
   double map_cell_m = 0.2;
   std::size_t map_max_points = 2'000'000;
+  bool realtime = false;
 };
 
 void print_result(const replay::ReplayResult& r) {
@@ -39,6 +46,9 @@ void print_result(const replay::ReplayResult& r) {
   fmt::print("map:        {} ({} points)\n", r.map.string(), s.exported_points);
   fmt::print("timing:     {} (+ {}, {})\n", r.timing_text.string(),
              r.timing_json.filename().string(), r.frames_csv.filename().string());
+  for (const auto& p : r.configured_outputs) {
+    fmt::print("also:       {} (the configuration's outputs)\n", p.string());
+  }
   fmt::print(
       "frame time (wall) p50 {:.2f} ms, p95 {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms; CPU (all "
       "threads) "
@@ -57,6 +67,42 @@ void print_result(const replay::ReplayResult& r) {
   }
 }
 
+int run_realtime(const LivodConfig& config, const ReplayArgs& args) {
+  runtime::DaemonOptions options;
+  options.paced_replay = true;
+  options.inputs = args.inputs;
+  options.out_dir = args.out;
+  options.threads = args.threads;
+  options.max_duration = from_seconds(args.max_duration_s);
+  options.map_cell_m = args.map_cell_m;
+  options.map_max_points = args.map_max_points;
+  const runtime::DaemonResult r = runtime::run_daemon(config, options);
+  for (const auto& s : r.sensor_summaries) fmt::print("{}\n", s);
+  const auto& p = r.publisher;
+  fmt::print("stopped by {}: {} frames; frame time p50 {:.2f} ms, p99 {:.2f} ms\n", r.stopped_by,
+             r.frames, p.frame_ms.percentile(0.5), p.frame_ms.percentile(0.99));
+  fmt::print("outputs: {}/trajectory.txt, map.pcd, timing.txt\n", args.out);
+  for (const auto& e : r.errors) fmt::print(stderr, "livod replay: {}\n", e);
+  if (r.exit_code != 0) return r.exit_code;
+  // The configuration's outputs, honoured as in the fast replay: copies of OUTDIR's files.
+  const std::filesystem::path out(args.out);
+  const std::pair<std::filesystem::path, std::filesystem::path> copies[] = {
+      {out / "trajectory.txt", config.outputs.trajectory},
+      {out / "map.pcd", config.outputs.map_pcd},
+      {out / "timing.txt", config.outputs.timing_report}};
+  for (const auto& [from, to] : copies) {
+    if (to.empty()) continue;
+    std::error_code ec;
+    std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, ec);
+    if (ec) {
+      fmt::print(stderr, "livod replay: cannot write {}: {}\n", to.string(), ec.message());
+      return kExitFailure;
+    }
+    fmt::print("also: {} (the configuration's outputs)\n", to.string());
+  }
+  return 0;
+}
+
 int run(const ReplayArgs& args) {
   const ConfigResult loaded = load_config(args.config);
   for (const auto& problem : loaded.problems) {
@@ -66,6 +112,14 @@ int run(const ReplayArgs& args) {
     fmt::print(stderr, "livod replay: {}: {} error(s), {} warning(s); nothing replayed\n",
                loaded.source, loaded.error_count(), loaded.warning_count());
     return kExitFailure;
+  }
+  if (args.realtime) {
+    try {
+      return run_realtime(loaded.config, args);
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "livod replay: {}\n", e.what());
+      return kExitFailure;
+    }
   }
   replay::ReplayOptions options;
   options.out_dir = args.out;
@@ -79,6 +133,14 @@ int run(const ReplayArgs& args) {
     const replay::ReplayResult result = replay::run_replay(loaded.config, options);
     for (const auto& note : result.notes) fmt::print(stderr, "livod replay: note: {}\n", note);
     print_result(result);
+    if (result.interrupted_by != 0) {
+      fmt::print(stderr,
+                 "livod replay: interrupted by {} after {:.1f} s of recording: the outputs cover "
+                 "what was replayed until then\n",
+                 result.interrupted_by == SIGINT ? "SIGINT" : "SIGTERM",
+                 result.summary.recording_s);
+      return runtime::exit_status_for(result.interrupted_by);
+    }
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "livod replay: {}\n", e.what());
@@ -100,6 +162,9 @@ void add_replay_command(CLI::App& app, CommandContext& ctx) {
                   "Recordings replacing the configured ones: NAME=PATH, or PATH assigned by format "
                   "(.pcap -> packet LiDARs, .log -> CAN IMUs, .bag -> bag sensors)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress line (it is drawn only on a terminal)");
+  cmd->add_flag("--realtime", args->realtime,
+                "At the recorded pace, through the daemon's capture rings and threads (as "
+                "`livod run`), instead of as fast as possible");
   cmd->add_option("--max-duration", args->max_duration_s,
                   "Stop after this many seconds of recording (0: all)")
       ->check(CLI::NonNegativeNumber);

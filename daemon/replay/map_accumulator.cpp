@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/hash_mix.hpp"
+#include "io/output_file.hpp"
 
 namespace livod::daemon::replay {
 namespace {
@@ -73,8 +74,8 @@ std::size_t MapAccumulator::bytes() const {
 
 void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
   const std::size_t n = xyz.size() / 3;
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw Error("cannot create " + path.string());
+  io::OutputFile file(path, true);
+  std::ostream& out = file.stream();
   out << "# .PCD v0.7 - Point Cloud Data file format\n"
       << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
       << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
@@ -82,8 +83,7 @@ void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz)
   // runs on.
   out.write(reinterpret_cast<const char*>(xyz.data()),
             static_cast<std::streamsize>(n * 3 * sizeof(float)));
-  out.flush();
-  if (!out) throw Error("cannot write " + path.string());
+  file.commit();
 }
 
 }  // namespace livod::daemon::replay

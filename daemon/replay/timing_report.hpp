@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "estimator/pipeline.hpp"
+#include "io/output_file.hpp"
 
 namespace livod::daemon::replay {
 
@@ -97,8 +98,7 @@ class FrameTable {
   void close();
 
  private:
-  std::filesystem::path path_;
-  std::ofstream out_;
+  io::OutputFile file_;  // NAME.partial until close()
 };
 
 }  // namespace livod::daemon::replay

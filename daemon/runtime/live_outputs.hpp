@@ -1,0 +1,70 @@
+#pragma once
+// The scheduler side of the daemon's outputs: copies each frame, IMU-rate pose and health snapshot
+// into a pre-allocated record and hands it to the publisher thread (publisher.hpp) through
+// RecordChannels, ringing its doorbell. Never blocks and never allocates per frame: when the
+// publisher falls behind, records are dropped and counted (EstimatorHealthRecord::records_dropped).
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+
+#include "daemon/runtime/output_sink.hpp"
+#include "daemon/runtime/record_channel.hpp"
+#include "daemon/runtime/records.hpp"
+#include "drivers/capture/doorbell.hpp"
+
+namespace livod::daemon::runtime {
+
+class Scheduler;
+
+// The channels between the scheduler (producer) and the publisher (consumer).
+struct PublisherChannels {
+  struct Sizes {
+    std::size_t frames = 8;
+    std::size_t imu_poses = 512;
+    std::size_t health = 4;
+    std::size_t cloud_points = 0;  // registered-scan capacity per frame record; 0: not copied
+  };
+  explicit PublisherChannels(const Sizes& sizes);
+
+  RecordChannel<FrameRecord> frames;
+  RecordChannel<PoseRecord> imu_poses;
+  RecordChannel<HealthRecord> health;
+  drivers::Doorbell doorbell;  // rung by the producer after each publish
+  std::size_t cloud_points;
+};
+
+struct LiveOutputsOptions {
+  bool imu_poses = true;
+  // An IMU-rate pose this long after the last filter update is marked IMU_ONLY.
+  Nanoseconds imu_only_after{300'000'000};
+};
+
+class LiveOutputs final : public OutputSink {
+ public:
+  LiveOutputs(PublisherChannels& channels, const LiveOutputsOptions& options);
+
+  void on_frame(const FrameOutput& frame) override;
+  void on_imu_pose(const ImuPoseOutput& pose) override;
+  [[nodiscard]] bool wants_imu_poses() const override { return options_.imu_poses; }
+
+  // Scheduler thread, at the health cadence: a health snapshot for the publisher. When the
+  // estimator's LiDAR is STALE, the last pose is published again with status SENSOR_STALE.
+  void publish_health(Scheduler& scheduler, HostTime now);
+
+  [[nodiscard]] std::uint64_t dropped() const;
+
+ private:
+  PublisherChannels& channels_;
+  LiveOutputsOptions options_;
+  std::uint64_t imu_sequence_ = 0;
+  std::optional<PoseRecord> last_pose_;  // published again (SENSOR_STALE) while the LiDAR is STALE
+  std::array<float, 1024> frame_ms_{};   // frame times since the previous health snapshot
+  std::size_t frame_ms_count_ = 0;
+  PoseStatus status_ = PoseStatus::kInitialising;
+  double last_degeneracy_ratio_ = 0.0;
+  estimator::VoxelMapStats last_map_;
+};
+
+}  // namespace livod::daemon::runtime
