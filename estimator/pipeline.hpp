@@ -106,6 +106,7 @@ class LioPipeline {
                       std::size_t max_groups = SIZE_MAX);
   // Scans queued for the estimator (waiting for IMU data or for their turn).
   [[nodiscard]] std::size_t queued_scans() const { return sync_.queued_scans(); }
+  [[nodiscard]] std::size_t queued_imu() const { return sync_.queued_imu(); }
 
   [[nodiscard]] bool initialised() const { return initializer_.done(); }
   [[nodiscard]] const std::string& init_status() const { return initializer_.status(); }

@@ -68,6 +68,8 @@ std::int8_t status_code(PoseStatus status) {
       return ::livod::pose_t::STATUS_DEGENERATE;
     case PoseStatus::kImuOnly:
       return ::livod::pose_t::STATUS_IMU_ONLY;
+    case PoseStatus::kSensorStale:
+      return ::livod::pose_t::STATUS_SENSOR_STALE;
   }
   return ::livod::pose_t::STATUS_INITIALISING;
 }
@@ -175,6 +177,11 @@ std::int8_t thread_state_code(ThreadState state) {
   me.map_planes = saturated(e.map_planes);
   me.map_points = saturated(e.map_points);
   me.map_bytes = saturated(e.map_bytes);
+  me.pose_latency_p50_ms = e.pose_latency_p50_ms;
+  me.pose_latency_p99_ms = e.pose_latency_p99_ms;
+  me.imu_pose_latency_p50_ms = e.imu_pose_latency_p50_ms;
+  me.imu_pose_latency_p99_ms = e.imu_pose_latency_p99_ms;
+  me.outputs_dropped = saturated(e.outputs_dropped);
 
   m.sensors.reserve(health.sensors.size());
   for (const SensorHealthRecord& s : health.sensors) {

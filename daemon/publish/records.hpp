@@ -22,6 +22,7 @@ enum class PoseStatus : std::uint8_t {
   kOk,            // the latest filter update used a well-constrained scan
   kDegenerate,    // the latest update was degenerate (weak translation along some direction)
   kImuOnly,       // no LiDAR update for a while: IMU dead reckoning
+  kSensorStale,   // the estimator's LiDAR is STALE: a repeat of the last pose, not a new one
 };
 
 // What produced a pose (livod.pose_t.SOURCE_*); also selects the channel.
@@ -144,6 +145,12 @@ struct EstimatorHealthRecord {
   std::uint64_t map_planes = 0;
   std::uint64_t map_points = 0;
   std::uint64_t map_bytes = 0;
+  // Latency over the last health period (ms); see livod.estimator_health_t.
+  double pose_latency_p50_ms = 0.0;
+  double pose_latency_p99_ms = 0.0;
+  double imu_pose_latency_p50_ms = 0.0;
+  double imu_pose_latency_p99_ms = 0.0;
+  std::uint64_t outputs_dropped = 0;
 };
 
 // livod.thread_health_t.STATE_*.

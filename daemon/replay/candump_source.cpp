@@ -14,7 +14,7 @@ namespace {
 class CanCandumpSource final : public ReplaySource {
  public:
   CanCandumpSource(const std::filesystem::path& file, std::unique_ptr<imu::CanImuDecoder> decoder)
-      : reader_(file), decoder_(std::move(decoder)) {}
+      : reader_(file, {.lenient = true}), decoder_(std::move(decoder)) {}
 
   std::optional<std::int64_t> peek_time() override {
     if (!have_frame_ && !ended_) {
@@ -38,6 +38,9 @@ class CanCandumpSource final : public ReplaySource {
   }
 
   void finish(const drivers::DecoderSinks& /*sinks*/) override {}
+
+  // Lines that do not parse are skipped (read past) and reported as lost.
+  [[nodiscard]] io::InputLossLog input_losses() const override { return reader_.losses(); }
 
   [[nodiscard]] std::string summary() const override {
     return fmt::format("candump: lines {}, frames {}, error/remote frames ignored {}; {}: {}",

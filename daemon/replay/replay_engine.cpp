@@ -159,6 +159,9 @@ ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options)
   s.map_bytes_peak = std::max(outputs.map_bytes_peak(), s.map.bytes);
   s.exported_points = outputs.map().size();
   s.exported_dropped = outputs.map().dropped_full();
+  s.exported_outside = outputs.map().dropped_outside();
+  s.exported_grid_half_extent_m = outputs.map().grid_half_extent_m();
+  s.exported_budget = options.map_max_points;
   for (const auto& r : scheduler.sensors()) {
     SensorSummary sensor;
     sensor.name = r->config->name;
@@ -172,6 +175,10 @@ ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options)
   }
   write_text_file(result.timing_text, format_timing_text(s));
   write_text_file(result.timing_json, format_timing_json(s));
+  for (const auto& r : scheduler.sensors()) {
+    result.losses.merge(r->source->input_losses());
+    for (auto& note : r->source->notes()) result.notes.push_back(std::move(note));
+  }
 
   // The configuration's outputs, honoured as `livod run` honours them: copies of OUTDIR's files.
   const auto copy_to = [&](const std::filesystem::path& from, const std::filesystem::path& to) {

@@ -24,6 +24,7 @@
 
 #include "daemon/config/config.hpp"
 #include "daemon/replay/timing_report.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon::replay {
 
@@ -41,7 +42,8 @@ struct ReplayOptions {
 
 struct ReplayResult {
   ReplaySummary summary;
-  std::vector<std::string> notes;  // sensors not used and why
+  std::vector<std::string> notes;  // sensors not used and why, recordings read with repairs
+  io::InputLossLog losses;         // what the sources could not read of their recordings
   std::filesystem::path trajectory;
   std::filesystem::path map;
   std::filesystem::path timing_text;

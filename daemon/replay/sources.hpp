@@ -17,6 +17,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/runtime/source.hpp"
 #include "drivers/lidar_decoder.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon::replay {
 

@@ -164,6 +164,8 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   PublisherChannels channels(sizes);
   LiveOutputsOptions lo;
   lo.imu_poses = options.bus != nullptr && lcm.publish_imu_rate;
+  lo.stale_after = from_seconds(config.health.stale_after_s);
+  lo.version = LIVOD_VERSION;
   LiveOutputs outputs(channels, lo);
 
   const int threads = options.threads >= 0 ? options.threads : config.estimator.threads;
@@ -242,6 +244,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
     const int s = signals.wait(Nanoseconds(100'000'000));
     if (s == SIGINT || s == SIGTERM) {
       result.stopped_by = s == SIGINT ? "SIGINT" : "SIGTERM";
+      result.stop_signal = s;
       spdlog::info("{}: stopping (draining the rings, writing the outputs)", result.stopped_by);
       break;
     }
@@ -259,6 +262,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   result.publisher = publisher.stats();
   for (const auto& s : scheduler.sensors()) {
     result.sensor_summaries.push_back(s->config->name + ": " + s->source->summary());
+    result.losses.merge(s->source->input_losses());
   }
   result.exit_code = result.errors.empty() ? 0 : 1;
   return result;

@@ -23,6 +23,7 @@
 
 #include "daemon/config/config.hpp"
 #include "daemon/runtime/publisher.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon::runtime {
 
@@ -55,6 +56,8 @@ struct DaemonResult {
   std::vector<std::string> sensor_summaries;  // "name: <source summary>"
   std::vector<std::string> errors;            // what went wrong (exit_code != 0) or was lost
   std::string stopped_by;                     // "SIGTERM", "end of recording", ...
+  int stop_signal = 0;                        // SIGINT / SIGTERM when one stopped it
+  io::InputLossLog losses;  // paced replay: what the recordings' readers could not read
 };
 
 // Runs until stopped. The configuration must have loaded without errors. Throws livod::Error

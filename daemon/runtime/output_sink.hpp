@@ -31,7 +31,8 @@ struct FrameOutput {
 
 struct ImuPoseOutput {
   const estimator::PredictedPose& pose;
-  std::int64_t rx_ns = 0;  // host receive time of the IMU sample
+  const ImuSample& sample;  // the body-IMU sample it was propagated to (mapped)
+  std::int64_t rx_ns = 0;   // host receive time of the IMU sample
 };
 
 class OutputSink {

@@ -39,7 +39,7 @@ class PacedPcap final : public MeasurementSource {
     po.doorbell = schedule.doorbell;
     pacer_ = std::jthread([this, po](const std::stop_token& stop) {
       try {
-        drivers::push_pcap_paced(file_, routes_, po, stop);
+        result_ = drivers::push_pcap_paced(file_, routes_, po, stop);
       } catch (const std::exception& e) {
         // Reported by summary(); the source then ends like a recording that ended.
         error_ = e.what();
@@ -82,6 +82,11 @@ class PacedPcap final : public MeasurementSource {
     return h;
   }
 
+  [[nodiscard]] io::InputLossLog input_losses() const override {
+    if (!progress_.done.load(std::memory_order_acquire)) return {};
+    return result_.losses;
+  }
+
   [[nodiscard]] std::string summary() const override {
     const auto c = consumer_->decoder_counters();
     std::uint64_t overruns = 0;
@@ -105,7 +110,9 @@ class PacedPcap final : public MeasurementSource {
   std::unique_ptr<drivers::StreamConsumer> consumer_;
   drivers::StreamMonitor monitor_;
   drivers::PaceProgress progress_;
-  std::string error_;   // written by the pacer before `done` (release), read after (acquire)
+  // Written by the pacer before `done` (release), read after (acquire).
+  std::string error_;
+  drivers::PaceResult result_;
   std::jthread pacer_;  // last: stopped and joined before the rings go
 };
 
@@ -152,6 +159,8 @@ class PacedRecording final : public MeasurementSource {
   }
   bool exhausted() override { return !recorded_->peek_time(); }
   [[nodiscard]] std::string summary() const override { return "paced " + recorded_->summary(); }
+  [[nodiscard]] io::InputLossLog input_losses() const override { return recorded_->input_losses(); }
+  [[nodiscard]] std::vector<std::string> notes() const override { return recorded_->notes(); }
   [[nodiscard]] std::optional<double> fraction_done() const override {
     return recorded_->fraction_done();
   }

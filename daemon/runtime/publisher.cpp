@@ -67,9 +67,9 @@ void Publisher::run(const std::stop_token& stop) {
 
 bool Publisher::drain() {
   bool any = false;
-  while (PoseRecord* p = channels_.imu_poses.next()) {
+  while (ImuPoseRecord* p = channels_.imu_poses.next()) {
     any = true;
-    if (bus_ != nullptr) bus_->publish_imu_pose(*p);
+    if (bus_ != nullptr) bus_->publish_pose(p->pose);
     const double ms = ms_between(p->rx_ns, host_now().ns);
     stats_.imu_latency_ms.add(ms);
     window_imu_latency_.add(ms);
@@ -97,18 +97,25 @@ void Publisher::on_frame(FrameRecord& f) {
   }
   if (bus_ != nullptr) {
     bus_->publish_pose(f.pose);
-    const double ms = ms_between(f.pose.rx_ns, host_now().ns);
+    const double ms = ms_between(f.rx_ns, host_now().ns);
     stats_.pose_latency_ms.add(ms);
     window_pose_latency_.add(ms);
-    if (options_.publish_cloud) bus_->publish_cloud(f);
+    if (options_.publish_cloud) {
+      cloud_.t = f.pose.t;
+      cloud_.points.resize(f.xyz_world.size() / 3);
+      for (std::size_t i = 0; i < cloud_.points.size(); ++i) {
+        cloud_.points[i] = {f.xyz_world[3 * i], f.xyz_world[3 * i + 1], f.xyz_world[3 * i + 2],
+                            0.0F};
+      }
+      bus_->publish_cloud(cloud_);
+    }
   }
   ++stats_.poses;
   stats_.frame_ms.add(f.report.timings.total_ms);
   stats_.frame_cpu_ms.add(f.cpu_ms);
   if (trajectory_) {
     try {
-      trajectory_->write(MappedTime(f.pose.t_ns), f.pose.q_world_body.toRotationMatrix(),
-                         f.pose.p_world_body);
+      trajectory_->write(f.pose.t, f.pose.R_world_body, f.pose.p_world_body);
     } catch (const std::exception& e) {
       errors_.push_back(e.what());
       trajectory_.reset();
@@ -122,20 +129,31 @@ void Publisher::on_frame(FrameRecord& f) {
 }
 
 void Publisher::on_health(HealthRecord& h) {
-  const auto beats = threads_.update(HostTime(h.host_ns));
+  const auto beats = threads_.update(h.host_time);
   h.threads.resize(beats.size());
   for (std::size_t i = 0; i < beats.size(); ++i) {
-    h.threads[i].name = beats[i].name;
-    h.threads[i].age_s = to_seconds(beats[i].age);
-    h.threads[i].stuck = beats[i].stuck;
+    auto& t = h.threads[i];
+    t.name = beats[i].name;
+    t.state = beats[i].stuck ? publish::ThreadState::kStuck : publish::ThreadState::kAlive;
+    t.heartbeat_age_ns = beats[i].age.count();
+    t.heartbeats = beats[i].beats;
+    t.stuck_after_ns = options_.stuck_after.count();
   }
-  h.pose_latency_ms_p50 = window_pose_latency_.percentile(0.5);
-  h.pose_latency_ms_p99 = window_pose_latency_.percentile(0.99);
-  h.imu_latency_ms_p50 = window_imu_latency_.percentile(0.5);
-  h.imu_latency_ms_p99 = window_imu_latency_.percentile(0.99);
+  auto& e = h.estimator;
+  e.pose_latency_p50_ms = window_pose_latency_.percentile(0.5);
+  e.pose_latency_p99_ms = window_pose_latency_.percentile(0.99);
+  e.imu_pose_latency_p50_ms = window_imu_latency_.percentile(0.5);
+  e.imu_pose_latency_p99_ms = window_imu_latency_.percentile(0.99);
   window_pose_latency_.clear();
   window_imu_latency_.clear();
-  if (bus_ != nullptr) bus_->publish_health(h);
+  // CLOCK_REALTIME follows NTP: the offset to the mapped (monotonic) timeline is re-measured.
+  realtime_.refresh();
+  h.unix_time_ns = h.host_time.ns + realtime_.offset_ns();
+  if (bus_ != nullptr) {
+    bus_->set_time_base(publish::TimeBase{realtime_.offset_ns()});
+    h.channels = bus_->channel_counters();
+    bus_->publish_health(h);
+  }
   ++stats_.health;
   log_health(h);
 }
@@ -145,29 +163,35 @@ void Publisher::log_health(const HealthRecord& h) {
   std::string line;
   bool trouble = false;  // something an operator must look at: logged as a warning
   for (const auto& s : h.sensors) {
-    states += s.name + "=" + s.state + " ";
-    trouble = trouble || s.state == "STALE";
+    const char* state = s.state == publish::SensorState::kStale       ? "STALE"
+                        : s.state == publish::SensorState::kStreaming ? "STREAMING"
+                                                                      : "WAITING";
+    states += s.name + "=" + state + " ";
+    trouble = trouble || s.state == publish::SensorState::kStale;
     line += fmt::format(
-        "{} {} {:.0f} pkt/s (kernel drops {}, ring overruns {}, gaps {}, decode "
-        "errors {}{}{}); ",
-        s.name, s.state, s.packets_per_s, s.kernel_drops, s.ring_overruns, s.sequence_gaps,
+        "{} {} {:.0f} pkt/s (kernel drops {}, ring overruns {}, gaps {}, decode errors {}{}{}); ",
+        s.name, state, s.packets_per_s, s.kernel_drops, s.ring_overruns, s.sequence_gaps,
         s.decode_errors, s.device_state.empty() ? "" : ", device " + s.device_state,
         s.last_error.empty() ? "" : ", " + s.last_error);
   }
   const auto& e = h.estimator;
   states += to_string(e.status);
   line += fmt::format(
-      "estimator {} frames {} p50 {:.1f} ms p99 {:.1f} ms, dropped scans {}, "
-      "latency p50 {:.2f} ms p99 {:.2f} ms",
-      to_string(e.status), e.frames, e.frame_ms_p50, e.frame_ms_p99, e.scans_dropped,
-      h.pose_latency_ms_p50, h.pose_latency_ms_p99);
+      "estimator {} frames {} p50 {:.1f} ms p99 {:.1f} ms, dropped scans {}, latency p50 {:.2f} "
+      "ms p99 {:.2f} ms",
+      to_string(e.status), e.scans_processed, e.frame_time_p50_ms, e.frame_time_p99_ms,
+      e.scans_dropped_queue, e.pose_latency_p50_ms, e.pose_latency_p99_ms);
   if (e.status == PoseStatus::kInitialising) line += " (" + e.init_status + ")";
   for (const auto& t : h.threads) {
-    if (t.stuck) line += fmt::format("; thread {} stuck for {:.1f} s", t.name, t.age_s);
-    trouble = trouble || t.stuck;
+    const bool stuck = t.state == publish::ThreadState::kStuck;
+    if (stuck) {
+      line += fmt::format("; thread {} stuck for {:.1f} s", t.name,
+                          static_cast<double>(t.heartbeat_age_ns) * 1e-9);
+    }
+    trouble = trouble || stuck;
   }
   trouble = trouble || e.status == PoseStatus::kSensorStale;
-  const HostTime now(h.host_ns);
+  const HostTime now = h.host_time;
   const bool changed = states != last_states_;
   const bool due = !last_log_ || now - *last_log_ >= options_.log_period;
   if (changed || due) {

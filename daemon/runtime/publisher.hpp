@@ -16,6 +16,7 @@
 #include <string>
 #include <thread>
 
+#include "core/realtime_offset.hpp"
 #include "daemon/replay/map_accumulator.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
 #include "daemon/runtime/heartbeat.hpp"
@@ -25,16 +26,23 @@
 
 namespace livod::daemon::runtime {
 
-// Where poses, health and clouds go (LCM in the daemon). Called on the publisher thread only.
+// Where poses, health and clouds go (LCM in the daemon: lcm_bus.hpp). Called on the publisher
+// thread only.
 class MessageBus {
  public:
   virtual ~MessageBus() = default;
+  // Filter poses and IMU-rate poses (PoseRecord::source tells them apart).
   virtual void publish_pose(const PoseRecord& pose) = 0;
-  virtual void publish_imu_pose(const PoseRecord& pose) = 0;
   virtual void publish_health(const HealthRecord& health) = 0;
   // The registered scan (decimated) of a frame.
-  virtual void publish_cloud(const FrameRecord& frame) = 0;
-  // Messages that could not be sent (counted by the bus).
+  virtual void publish_cloud(const publish::CloudRecord& cloud) = 0;
+  // unix = mapped + offset, refreshed by the publisher at every health record.
+  virtual void set_time_base(publish::TimeBase /*time_base*/) {}
+  // Per-channel counters for health (empty when the bus has none).
+  [[nodiscard]] virtual std::vector<publish::ChannelCounters> channel_counters() const {
+    return {};
+  }
+  // Messages that could not be sent.
   [[nodiscard]] virtual std::uint64_t failures() const = 0;
 };
 
@@ -101,7 +109,9 @@ class Publisher {
   LatencyHistogram window_pose_latency_;  // since the previous health record
   LatencyHistogram window_imu_latency_;
   std::optional<HostTime> last_log_;
-  std::string last_states_;  // sensor states + estimator status of the last logged health
+  std::string last_states_;     // sensor states + estimator status of the last logged health
+  publish::CloudRecord cloud_;  // reused for every frame (its vector keeps its capacity)
+  RealtimeToMonotonic realtime_;
   std::vector<std::string> errors_;
   bool stopped_ = false;
   std::jthread thread_;  // last

@@ -121,7 +121,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
       if (!want_imu_poses_) return;
       if (const auto pose = predictor_.add(m)) {
         const auto t0 = Clock::now();
-        sink_.on_imu_pose(ImuPoseOutput{*pose, current_rx_ns_});
+        sink_.on_imu_pose(ImuPoseOutput{*pose, m, current_rx_ns_});
         ++stats_.imu_poses;
         stats_.output_s += seconds_since(t0);
       }

@@ -22,6 +22,7 @@
 #include "core/time.hpp"
 #include "drivers/capture/health.hpp"
 #include "drivers/lidar_decoder.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon::runtime {
 
@@ -47,6 +48,11 @@ class MeasurementSource {
   [[nodiscard]] virtual std::string summary() const = 0;
   // Fraction of the recording consumed when the source can tell (bags), for the progress line.
   [[nodiscard]] virtual std::optional<double> fraction_done() const { return std::nullopt; }
+  // What a recording's reader could not read: damaged stretches it skipped, messages that did not
+  // decode. Complete once the source is exhausted. Live sources count their losses in health.
+  [[nodiscard]] virtual io::InputLossLog input_losses() const { return {}; }
+  // Remarks on how the recording was read (a bag index rebuilt by scanning, ...).
+  [[nodiscard]] virtual std::vector<std::string> notes() const { return {}; }
 
   // True when no event will ever be ready again: a recording at its end, a live source stopped
   // and drained. A live source that is merely idle is not exhausted.

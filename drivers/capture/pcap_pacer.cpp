@@ -77,6 +77,7 @@ PaceResult pace(const std::filesystem::path& capture, const PaceOptions& options
       options.progress->last_delivery_ns.store(host_now().ns, std::memory_order_relaxed);
     }
   }
+  result.losses = reader.losses();
   if (options.progress != nullptr) options.progress->done.store(true, std::memory_order_release);
   return result;
 }

@@ -19,6 +19,7 @@
 #include "core/time.hpp"
 #include "drivers/capture/doorbell.hpp"
 #include "drivers/capture/packet_ring.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::drivers {
 
@@ -51,6 +52,7 @@ struct PaceResult {
   Nanoseconds max_lateness{0};   // worst delay behind the schedule
   Nanoseconds recorded_span{0};  // last minus first record time
   bool stopped = false;          // the stop token fired before the end
+  io::InputLossLog losses;       // damaged stretches of the capture its reader skipped
 };
 
 // pcap destination port -> where the live source listens.

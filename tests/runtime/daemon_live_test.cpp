@@ -31,10 +31,11 @@ using daemon::runtime::PoseStatus;
 // Records what the publisher thread sends (read after the daemon returned).
 class RecordingBus final : public daemon::runtime::MessageBus {
  public:
-  void publish_pose(const PoseRecord& p) override { poses.push_back(p); }
-  void publish_imu_pose(const PoseRecord& p) override { imu_poses.push_back(p); }
+  void publish_pose(const PoseRecord& p) override {
+    (p.source == daemon::runtime::PoseSource::kFilter ? poses : imu_poses).push_back(p);
+  }
   void publish_health(const HealthRecord& h) override { health.push_back(h); }
-  void publish_cloud(const daemon::runtime::FrameRecord& /*f*/) override { ++clouds; }
+  void publish_cloud(const daemon::publish::CloudRecord& /*c*/) override { ++clouds; }
   [[nodiscard]] std::uint64_t failures() const override { return 0; }
 
   std::vector<PoseRecord> poses;
@@ -115,11 +116,11 @@ Comparison compare(const std::vector<PoseRecord>& live, const eval::Trajectory& 
   std::vector<std::int64_t> rep_ns;
   for (const double t : replayed.stamps_s) rep_ns.push_back(std::llround(t * 1e9));
   for (std::size_t j = 0; j < std::min<std::size_t>(8, rep_ns.size()); ++j) {
-    const std::int64_t shift = live.front().t_ns - rep_ns[j];
+    const std::int64_t shift = live.front().t.ns - rep_ns[j];
     Comparison c;
     for (const auto& p : live) {
       if (p.status == PoseStatus::kSensorStale) continue;  // a repeat, not a new pose
-      const std::int64_t t = p.t_ns - shift;
+      const std::int64_t t = p.t.ns - shift;
       const auto it = std::lower_bound(rep_ns.begin(), rep_ns.end(), t - 1'000'000);
       if (it == rep_ns.end() || std::llabs(*it - t) > 1'000'000) continue;
       const auto k = static_cast<std::size_t>(it - rep_ns.begin());
@@ -129,8 +130,7 @@ Comparison compare(const std::vector<PoseRecord>& live, const eval::Trajectory& 
         std::printf("pose %zu t %.3f dp %.3f mm\n", k, (t - rep_ns.front()) * 1e-9, dp * 1e3);
       }
       c.max_position_m = std::max(c.max_position_m, dp);
-      const Eigen::Matrix3d dR =
-          replayed.poses[k].rotation.transpose() * p.q_world_body.toRotationMatrix();
+      const Eigen::Matrix3d dR = replayed.poses[k].rotation.transpose() * p.R_world_body;
       c.max_rotation_deg = std::max(c.max_rotation_deg, so3::log(dR).norm() * 180.0 / M_PI);
     }
     if (c.matched > best.matched) best = c;
@@ -170,12 +170,12 @@ void live_matches_replay(const std::string& scenario_name, double duration_s) {
   // IMU-rate poses at the IMU rate, in time order.
   ASSERT_FALSE(live.bus.imu_poses.empty());
   const auto& imu = live.bus.imu_poses;
-  const double span_s = static_cast<double>(imu.back().t_ns - imu.front().t_ns) * 1e-9;
+  const double span_s = static_cast<double>(imu.back().t.ns - imu.front().t.ns) * 1e-9;
   const double rate = static_cast<double>(imu.size() - 1) / span_s;
   std::printf("[live] %s: %zu IMU-rate poses at %.1f Hz\n", scenario_name.c_str(), imu.size(),
               rate);
   EXPECT_TRUE(std::is_sorted(imu.begin(), imu.end(),
-                             [](const auto& a, const auto& b) { return a.t_ns < b.t_ns; }));
+                             [](const auto& a, const auto& b) { return a.t < b.t; }));
 
   // Health: zero loss, the sensor streamed.
   ASSERT_FALSE(live.bus.health.empty());
@@ -188,7 +188,8 @@ void live_matches_replay(const std::string& scenario_name, double duration_s) {
   }
   const bool streamed =
       std::any_of(live.bus.health.begin(), live.bus.health.end(), [](const HealthRecord& h) {
-        return !h.sensors.empty() && h.sensors.front().state == "STREAMING";
+        return !h.sensors.empty() &&
+               h.sensors.front().state == daemon::publish::SensorState::kStreaming;
       });
   EXPECT_TRUE(streamed);
   EXPECT_EQ(live.result.publisher.poses, n);
@@ -219,15 +220,16 @@ TEST(DaemonLive, SilentSensorGoesStaleAndComesBack) {
   EXPECT_GT(live.sent.silenced, 0U);
 
   // Health: STREAMING, then STALE during the silence, then STREAMING again; the daemon went on.
-  std::vector<std::string> states;
+  using daemon::publish::SensorState;
+  std::vector<SensorState> states;
   for (const auto& h : live.bus.health) {
-    const std::string& s = h.sensors.front().state;
+    const SensorState s = h.sensors.front().state;
     if (states.empty() || states.back() != s) states.push_back(s);
   }
-  const auto stale = std::find(states.begin(), states.end(), "STALE");
+  const auto stale = std::find(states.begin(), states.end(), SensorState::kStale);
   ASSERT_NE(stale, states.end());
-  EXPECT_NE(std::find(states.begin(), stale, "STREAMING"), stale);
-  EXPECT_NE(std::find(stale, states.end(), "STREAMING"), states.end());
+  EXPECT_NE(std::find(states.begin(), stale, SensorState::kStreaming), stale);
+  EXPECT_NE(std::find(stale, states.end(), SensorState::kStreaming), states.end());
   const bool estimator_said_so = std::any_of(
       live.bus.health.begin(), live.bus.health.end(),
       [](const HealthRecord& h) { return h.estimator.status == PoseStatus::kSensorStale; });
@@ -242,7 +244,7 @@ TEST(DaemonLive, SilentSensorGoesStaleAndComesBack) {
     return p.status != PoseStatus::kSensorStale;
   });
   ASSERT_NE(after, live.bus.poses.end());
-  EXPECT_GT(after->t_ns - stale_pose->t_ns, 1'500'000'000);  // the next pose is after the gap
+  EXPECT_GT((after->t - stale_pose->t).count(), 1'500'000'000);  // the next pose is after the gap
   EXPECT_GE(std::count_if(after, live.bus.poses.end(),
                           [](const auto& p) { return p.status == PoseStatus::kOk; }),
             20);

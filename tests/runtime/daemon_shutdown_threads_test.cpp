@@ -29,10 +29,11 @@ std::size_t count_lines(const std::filesystem::path& path) {
 
 class CountingBus final : public daemon::runtime::MessageBus {
  public:
-  void publish_pose(const daemon::runtime::PoseRecord& /*p*/) override { ++poses; }
-  void publish_imu_pose(const daemon::runtime::PoseRecord& /*p*/) override { ++imu_poses; }
+  void publish_pose(const daemon::runtime::PoseRecord& p) override {
+    ++(p.source == daemon::runtime::PoseSource::kFilter ? poses : imu_poses);
+  }
   void publish_health(const daemon::runtime::HealthRecord& /*h*/) override { ++health; }
-  void publish_cloud(const daemon::runtime::FrameRecord& /*f*/) override { ++clouds; }
+  void publish_cloud(const daemon::publish::CloudRecord& /*c*/) override { ++clouds; }
   [[nodiscard]] std::uint64_t failures() const override { return 0; }
   std::uint64_t poses = 0;
   std::uint64_t imu_poses = 0;

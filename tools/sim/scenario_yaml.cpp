@@ -28,6 +28,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -305,7 +306,9 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
           "the serial IMU cannot be the body IMU (livod replay does not read serial captures yet)");
   }
   if (s.name.empty()) p.add(root, "scenario.name", "required (or give a base)");
-  if (!(s.duration_s > 0.0)) p.add(root["duration_s"], "scenario.duration_s", "must be positive");
+  if (!(std::isfinite(s.duration_s) && s.duration_s > 0.0 && s.duration_s <= 3600.0)) {
+    p.add(root["duration_s"], "scenario.duration_s", "must be a number of seconds in (0, 3600]");
+  }
   bool body_found = s.can_imu && s.can_imu->name == s.body_imu;
   for (const auto& l : s.lidars) body_found = body_found || l.name == s.body_imu;
   body_found = body_found || (s.serial_imu && s.serial_imu->name == s.body_imu);
