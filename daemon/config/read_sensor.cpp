@@ -427,7 +427,7 @@ void read_serial(MapReader& s, SerialConfig& serial) {
     if (const auto p = parse_enum<SerialProtocol>(s.problems(), *v)) {
       serial.protocol = *p;
       if (*p == SerialProtocol::vectornav_binary) {
-        s.problems().error(ProblemKind::invalid_value, v->path, v->at,
+        s.problems().error(ProblemKind::not_implemented, v->path, v->at,
                            "vectornav_binary is not implemented (xsens_mtdata2 is)");
       }
     }

@@ -24,11 +24,16 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// A configuration with no problem but "not implemented": check-config rejects live cameras and
+// IMUs because the runtime does not start them yet; the device sources tested here are what it
+// will start.
 LivodConfig load_ok(const std::string& yaml) {
   auto r = load_config_from_string(yaml, "test.yaml");
   std::string problems;
-  for (const auto& p : r.problems) problems += format_problem(r.source, p) + "\n";
-  EXPECT_TRUE(r.ok()) << problems;
+  for (const auto& p : r.problems) {
+    if (p.kind != ProblemKind::not_implemented) problems += format_problem(r.source, p) + "\n";
+  }
+  EXPECT_TRUE(problems.empty()) << problems;
   return r.config;
 }
 
