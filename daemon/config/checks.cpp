@@ -400,14 +400,17 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
         }
         break;
     }
+    // drivers/imu has the live SocketCAN and serial/USB sources and their decoders
+    // (daemon/devices), but the runtime does not start them yet: `livod run` would fail at open.
     if (s.driver == Driver::serial_imu) {
       problems.error(ProblemKind::not_implemented, sites[i].path + ".driver", sites[i].at,
-                     where + ": no serial IMU protocol is implemented yet");
+                     where + ": serial IMUs cannot be run yet: `livod run` has no live serial " +
+                         "IMU source and `livod replay` cannot read serial captures");
     } else if (sites[i].source_ok && std::holds_alternative<DeviceSourceConfig>(s.source)) {
       problems.error(ProblemKind::not_implemented, sites[i].path + ".source", sites[i].at,
-                     where + ": live " + std::string(enum_name(s.driver)) +
-                         " devices are not supported yet (a recording of it can be replayed: " +
-                         "source.replay)");
+                     where + ": `livod run` does not start live " +
+                         std::string(enum_name(s.driver)) +
+                         " devices yet (a recording of it can be replayed: source.replay)");
     }
   }
 }

@@ -107,6 +107,9 @@ struct InternalImuConfig {
 };
 
 enum class CameraModel { pinhole, equidistant };
+enum class CameraPixelFormat { mono8, mono16, bgr8 };
+enum class CameraTimestamp { automatic, start_of_exposure, end_of_frame };
+enum class CameraTrigger { free_run, software, hardware };
 
 struct CameraConfig {
   CameraModel model = CameraModel::pinhole;
@@ -119,6 +122,20 @@ struct CameraConfig {
   std::optional<double> exposure_s;     // fixed exposure; unset = leave the camera's setting
   std::optional<double> frame_rate_hz;  // unset = leave the camera's setting
   int decimation = 1;                   // keep every n-th frame
+
+  // Live capture (v4l2, aravis; docs/drivers/camera.md).
+  CameraPixelFormat pixel_format = CameraPixelFormat::mono8;
+  std::optional<double> gain;  // camera units (GenICam: usually dB; V4L2: driver units)
+  int buffers = 0;             // driver buffers; 0 = the driver's default (V4L2 4, Aravis 8)
+  CameraTimestamp timestamp = CameraTimestamp::automatic;  // which instant the stamps mark
+  double readout_s = 0.0;  // end-of-frame stamps: end of exposure -> stamp (readout + transfer)
+  std::vector<std::string> v4l2_formats;  // v4l2: wire formats (fourcc) to ask for, best first
+  CameraTrigger trigger = CameraTrigger::free_run;  // aravis
+  std::string trigger_line = "Line1";               // aravis, hardware trigger input
+  int packet_size = 0;                              // aravis GigE: 0 = negotiate
+  bool packet_resend = true;                        // aravis GigE
+  bool ptp = false;                                 // aravis: enable IEEE 1588 in the camera
+  bool chunk_exposure = true;                       // aravis: per-frame exposure from chunks
 };
 
 enum class CanDecoder { bosch_mm7, sbg, custom };
@@ -149,6 +166,7 @@ struct CanConfig {
   SbgCanIds sbg_ids;
   std::vector<CanSignal> signals;  // custom: exactly one per quantity
   std::uint32_t sample_id = 0;     // custom: the frame whose arrival completes a sample
+  bool fd_frames = false;          // live: also receive CAN FD frames
 };
 
 enum class SerialProtocol { xsens_mtdata2, vectornav_binary };

@@ -6,8 +6,10 @@
 #include <cctype>
 #include <system_error>
 
+#include "core/error.hpp"
 #include "daemon/config/readers.hpp"
 #include "daemon/config/sensor_models.hpp"
+#include "drivers/imu/serial_port.hpp"
 
 namespace livod::daemon::config_detail {
 
@@ -281,6 +283,14 @@ bool read_device(MapReader& d, Driver driver, DeviceSourceConfig& device) {
       const auto s = parse_string(problems, *v);
       if (s) device.path = *s;
       ok = ok && s.has_value();
+      if (s && driver == Driver::serial_imu && s->rfind("usb:", 0) == 0) {
+        try {
+          (void)imu::parse_usb_selector(*s);  // usb:VVVV:PPPP[:SERIAL] selects a libusb device
+        } catch (const Error& e) {
+          problems.error(ProblemKind::invalid_value, v->path, v->at, e.what());
+          ok = false;
+        }
+      }
     } else {
       ok = false;
     }
@@ -414,7 +424,13 @@ void read_clock(MapReader& c, ClockConfig& clock) {
 
 void read_serial(MapReader& s, SerialConfig& serial) {
   if (const auto v = s.require("protocol", "xsens_mtdata2 or vectornav_binary")) {
-    if (const auto p = parse_enum<SerialProtocol>(s.problems(), *v)) serial.protocol = *p;
+    if (const auto p = parse_enum<SerialProtocol>(s.problems(), *v)) {
+      serial.protocol = *p;
+      if (*p == SerialProtocol::vectornav_binary) {
+        s.problems().error(ProblemKind::not_implemented, v->path, v->at,
+                           "vectornav_binary is not implemented (xsens_mtdata2 is)");
+      }
+    }
   }
   if (const auto v = s.take("baud_rate"); v && !v->node.IsNull()) {
     static constexpr std::array<long long, 12> kBaudRates = {9600,    19200,   38400,   57600,
@@ -634,7 +650,7 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
     if (const auto v = m.require("camera", "model, size and intrinsics")) {
       site.camera_at = v->at;
       MapReader c(problems, v->node, v->path, v->at, false);
-      if (c.ok()) read_camera(c, sensor.camera, site.camera_ok);
+      if (c.ok()) read_camera(c, *driver, sensor.camera, site.camera_ok);
     }
   } else {
     take_applicable(m, "camera", false, "cameras (v4l2, aravis, dataset_camera)");

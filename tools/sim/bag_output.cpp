@@ -11,6 +11,8 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "drivers/imu/bosch_mm7.hpp"
+#include "drivers/imu/candump_frames.hpp"
 #include "drivers/imu/sbg_can.hpp"
 #include "drivers/livox/livox_decoder.hpp"
 #include "drivers/registry.hpp"
@@ -185,31 +187,35 @@ class CanImuSource final : public QueuedSource {
       : name_(source.name),
         clock_(source.clock, host_epoch_ns, kSbgCounterWrapNs),
         reader_(source.log),
-        topic_(topic) {}
+        topic_(topic) {
+    if (source.format == CanImuFormat::kSbg) {
+      decoder_ = std::make_unique<imu::SbgCanDecoder>();
+    } else {
+      decoder_ = std::make_unique<imu::BoschMm7Decoder>();
+    }
+  }
 
  private:
   bool refill() override {
     if (!reader_.next(frame_)) return false;
-    if (frame_.fd || frame_.rtr || frame_.error) return true;
-    imu::CanPayload payload;
-    payload.id = frame_.id;
-    payload.len = frame_.len;
-    std::copy_n(frame_.data.begin(), payload.data.size(), payload.data.begin());
-    payload.rx_time_ns = frame_.time_ns;
-    if (const auto sample = decoder_.on_frame(payload)) {
-      const std::int64_t stamp =
-          clock_.host_ns(sample->imu.stamp.sensor.ns, sample->imu.stamp.host.ns);
-      enqueue(frame_.time_ns, topic_.connection, to_imu_msg(sample->imu, stamp, name_, seq_));
+    if (frame_.rtr || frame_.error) return true;
+    decoder_->on_frame(imu::to_can_record(frame_), [this](const ImuSample& sample) {
+      // A device clock maps back exactly (SBG); without one (MM7) the stamp is the receive time
+      // of the sample's first frame, as a ROS driver stamps it.
+      const std::int64_t stamp = decoder_->has_sensor_clock()
+                                     ? clock_.host_ns(sample.stamp.sensor.ns, sample.stamp.host.ns)
+                                     : sample.stamp.host.ns;
+      enqueue(frame_.time_ns, topic_.connection, to_imu_msg(sample, stamp, name_, seq_));
       ++seq_;
       ++*topic_.count;
-    }
+    });
     return true;
   }
 
   std::string name_;
   SensorClockInverse clock_;
   io::CandumpReader reader_;
-  imu::SbgCanDecoder decoder_;
+  std::unique_ptr<imu::CanImuDecoder> decoder_;
   io::CanFrame frame_;
   Topic topic_;
   std::uint32_t seq_ = 0;

@@ -35,6 +35,7 @@
 #include "io/euroc.hpp"
 #include "io/rosbag/bag_writer.hpp"
 #include "io/rosbag/ros_messages.hpp"
+#include "tools/sim/scenario.hpp"
 #include "tools/sim/sensor_clock.hpp"
 
 namespace livod::sim {
@@ -116,8 +117,9 @@ struct BagLidarSource {
 
 struct BagCanImuSource {
   std::string name;
-  std::filesystem::path log;  // candump log, SBG layout
-  ClockFaults clock;          // of the device's microsecond counter
+  std::filesystem::path log;  // candump log
+  ClockFaults clock;          // of the device's microsecond counter (SBG)
+  CanImuFormat format = CanImuFormat::kSbg;
 };
 
 struct BagCameraSource {

@@ -489,7 +489,7 @@ TEST(ConfigProblems, InconsistentEstimatorSettings) {
 TEST(ConfigProblems, NoLidarIsAnError) {
   const auto result = load(R"(body_frame: imu
 sensors:
-  - {name: imu, driver: serial_imu, source: {device: {path: /dev/ttyUSB0}}, serial: {protocol: vectornav_binary}}
+  - {name: imu, driver: serial_imu, source: {device: {path: /dev/ttyUSB0}}, serial: {protocol: xsens_mtdata2}}
 )");
   only_problem(result, ProblemKind::inconsistent, "sensors");
 }
@@ -684,6 +684,14 @@ sensors:
     can: {decoder: sbg}
 )";
   EXPECT_EQ(not_implemented(live_can), std::vector<std::string>{"sensors[1].source"});
+
+  // The serial IMU drivers exist (drivers/imu), but neither `livod run` nor `livod replay` can
+  // feed one to the estimator yet.
+  std::string live_serial = live_can;
+  live_serial.replace(live_serial.find("    driver: can_imu"), std::string::npos,
+                      "    driver: serial_imu\n    source: {device: {path: /dev/ttyUSB0}}\n"
+                      "    serial: {protocol: xsens_mtdata2}\n");
+  EXPECT_EQ(not_implemented(live_serial), std::vector<std::string>{"sensors[1].driver"});
 }
 
 }  // namespace
