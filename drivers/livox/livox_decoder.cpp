@@ -1,5 +1,7 @@
 #include "drivers/livox/livox_decoder.hpp"
 
+#include <algorithm>
+
 namespace livod::livox {
 namespace {
 
@@ -67,6 +69,22 @@ void LivoxDecoder::on_packet(const drivers::PacketView& packet,
   }
   ++counters_.lidar_packets;
 
+  // Clock jumps: the timestamp type changed, the time went back further than any reordering
+  // explains, or it went ahead further than the receive times allow (lost packets take their
+  // time on the link too). The timeline restarts; nothing is counted lost across the jump.
+  bool jumped = false;
+  if (last_packet_end_ns_) {
+    const std::int64_t host_advance =
+        std::max<std::int64_t>(0, packet.host_time_ns - last_packet_host_ns_);
+    const std::int64_t advance = packet_.timestamp_ns - *last_packet_end_ns_;
+    jumped = packet_.time_type != last_time_type_ || advance < -kMaxReorderNs ||
+             advance > host_advance + kMaxUnexplainedAdvanceNs;
+  }
+  if (jumped) {
+    ++counters_.clock_jumps;
+    last_packet_end_ns_.reset();
+  }
+
   // Sequence gaps. A packet older than the newest one seen (reordered or delayed on the link) is
   // not a gap, and the newest one stays the reference; it was counted missing when its successor
   // came, so it takes one back: sequence_gaps counts the packets that never arrived.
@@ -90,6 +108,8 @@ void LivoxDecoder::on_packet(const drivers::PacketView& packet,
   if (!older) {
     last_packet_end_ns_ = packet_.timestamp_ns + packet_.span_ns;
     last_span_ns_ = packet_.span_ns;
+    last_packet_host_ns_ = packet.host_time_ns;
+    last_time_type_ = packet_.time_type;
   }
 
   for (std::uint16_t i = 0; i < packet_.count; ++i) {
