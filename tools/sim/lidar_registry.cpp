@@ -4,6 +4,7 @@
 #include <functional>
 
 #include "core/error.hpp"
+#include "tools/sim/hesai_sim.hpp"
 #include "tools/sim/livox_sim.hpp"
 #include "tools/sim/ouster_sim.hpp"
 #include "tools/sim/velodyne_sim.hpp"
@@ -32,6 +33,10 @@ std::vector<Entry> entries() {
       {"HDL-32E",
        "Velodyne HDL-32E, 600 RPM, data + position packets, internal IMU in the position packets",
        true, make_sim_hdl32e},
+      {"PANDARXT32",
+       "Hesai PandarXT-32, 600 RPM, single return, UDP sequence, angle correction file beside "
+       "the capture",
+       false, make_sim_pandar_xt32},
       // SIM-LIDAR-REGISTRY: one line per simulated model
   };
 }
