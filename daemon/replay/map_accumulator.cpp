@@ -71,19 +71,4 @@ std::size_t MapAccumulator::bytes() const {
   return xyz_.capacity() * sizeof(float) + table_.capacity() * sizeof(std::uint64_t);
 }
 
-void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
-  const std::size_t n = xyz.size() / 3;
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw Error("cannot create " + path.string());
-  out << "# .PCD v0.7 - Point Cloud Data file format\n"
-      << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
-  // PCD binary data is the points' memory layout: little-endian float32 on every host livod
-  // runs on.
-  out.write(reinterpret_cast<const char*>(xyz.data()),
-            static_cast<std::streamsize>(n * 3 * sizeof(float)));
-  out.flush();
-  if (!out) throw Error("cannot write " + path.string());
-}
-
 }  // namespace livod::daemon::replay

@@ -8,12 +8,12 @@ namespace {
 
 // PandarXT-32: 32 channels, 8 blocks, a firing round every 50 us (20 kHz), 4 mm distance unit
 // (stated in the header), years counted from 1900. Pandar40P: 40 channels, 10 blocks, a firing
-// round every 55.56 us (18 kHz at 10 Hz), 4 mm, years from 2000. Ranges: the datasheets.
+// round every 55.56 us (18 kHz at 10 Hz), 4 mm, years from 2000.
 constexpr std::array<ModelTraits, 2> kModels{{
     {Model::kPandarXT32, "PANDARXT32", PacketLayout::kPreHeader, 32, 8, 6, 1, 1900, 50'000.0, 0.004,
-     0.05, 120.0, 32 * 20'000.0},
+     32 * 20'000.0},
     {Model::kPandar40P, "PANDAR40P", PacketLayout::kBlockFlags, 40, 10, 0, 0, 2000, 55'560.0, 0.004,
-     0.3, 200.0, 40 * 18'000.0},
+     40 * 18'000.0},
 }};
 
 bool same_name(std::string_view a, std::string_view b) {

@@ -41,7 +41,8 @@ struct ModelTraits {
 [[nodiscard]] const ModelTraits& traits(Model model);
 [[nodiscard]] std::span<const ModelTraits> all_models();
 
-// Exact canonical name ("PANDARXT32", "PANDAR40P"), case-insensitive. nullopt if unknown.
+// Canonical name ("PANDARXT32", "PANDAR40P"), case-insensitive (aliases: the family table).
+// nullopt if unknown.
 [[nodiscard]] std::optional<Model> model_from_name(std::string_view name);
 
 }  // namespace livod::drivers::hesai

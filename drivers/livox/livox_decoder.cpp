@@ -2,31 +2,9 @@
 
 #include <algorithm>
 
+#include "core/numeric.hpp"
+
 namespace livod::livox {
-namespace {
-
-std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  std::int64_t q = a / b;
-  if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
-  return q;
-}
-
-}  // namespace
-
-std::optional<LivoxModel> livox_model(const std::string& name) {
-  // Point intervals and lines: sensor-protocols.md 1.3 (SDK1) and 2.3 (SDK2); host ports: the
-  // vendor SDK defaults (SDK1 first device: data and IMU on 56001; SDK2 Mid-360: 56301/56401,
-  // HAP: 57000/58000).
-  if (name == "AVIA" || name == "HORIZON" || name == "TELE-15") {
-    return LivoxModel{name, Protocol::kSdk1, 4167, 6, 56001, 56001};
-  }
-  if (name == "MID-40" || name == "MID-70") {
-    return LivoxModel{name, Protocol::kSdk1, 10000, 1, 56001, 56001};
-  }
-  if (name == "MID-360") return LivoxModel{name, Protocol::kSdk2, 0, 4, 56301, 56401};
-  if (name == "HAP") return LivoxModel{name, Protocol::kSdk2, 0, 6, 57000, 58000};
-  return std::nullopt;
-}
 
 LivoxDecoder::LivoxDecoder(LivoxModel model, LivoxDecoderOptions options)
     : model_(std::move(model)), options_(options) {

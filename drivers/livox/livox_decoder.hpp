@@ -29,7 +29,8 @@ struct LivoxModel {
   std::uint16_t imu_port = 56001;
 };
 
-// nullopt for an unknown model name.
+// The model's decoder facts from the Livox family tables (livox_family.cpp; names matched as
+// drivers::normalise_model_name does); nullopt for an unknown model name.
 std::optional<LivoxModel> livox_model(const std::string& name);
 
 struct LivoxDecoderOptions {

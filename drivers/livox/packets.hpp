@@ -12,9 +12,10 @@
 
 #include <Eigen/Core>
 
+#include "core/units.hpp"
+
 namespace livod::livox {
 
-inline constexpr double kStandardGravity = 9.80665;  // m/s^2 per g (Livox IMUs report g)
 inline constexpr std::size_t kMaxPointsPerPacket = 100;
 inline constexpr std::size_t kSdk1HeaderBytes = 18;
 inline constexpr std::size_t kSdk2HeaderBytes = 36;

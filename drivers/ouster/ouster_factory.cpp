@@ -7,8 +7,8 @@ namespace livod::drivers::ouster {
 
 std::unique_ptr<LidarDecoder> make_ouster_decoder(const DecoderConfig& config) {
   if (config.calibration) {
-    throw livod::Error("--calibration is for Velodyne sensors; an Ouster sensor (" + config.model +
-                       ") takes its metadata JSON (--metadata)");
+    throw livod::Error("--calibration is for Velodyne and Hesai sensors; an Ouster sensor (" +
+                       config.model + ") takes its metadata JSON (--metadata)");
   }
   if (!config.metadata) {
     throw livod::Error("an Ouster sensor (" + config.model +

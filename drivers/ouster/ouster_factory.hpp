@@ -1,10 +1,10 @@
 #pragma once
-// The registry's factory for Ouster sensors (model "OS"): needs the sensor metadata JSON.
+// The Ouster family's decoder factory (ouster_family.cpp): needs the sensor metadata JSON.
 
 #include <memory>
 
 #include "drivers/lidar_decoder.hpp"
-#include "drivers/registry.hpp"
+#include "drivers/lidar_family.hpp"
 
 namespace livod::drivers::ouster {
 

@@ -1,5 +1,7 @@
 #include "drivers/velodyne/velodyne_decoder.hpp"
 
+#include "core/numeric.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -32,11 +34,6 @@ bool imu_words_present(const PositionPacket& p) {
     if (m.gyro_deg_s != 0.0 || m.accel_x_g != 0.0 || m.accel_y_g != 0.0) return true;
   }
   return false;
-}
-
-std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  const std::int64_t q = a / b;
-  return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
 }
 
 }  // namespace
