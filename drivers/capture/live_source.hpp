@@ -23,12 +23,12 @@
 #include "core/time.hpp"
 #include "drivers/capture/capture_thread.hpp"
 #include "drivers/capture/health.hpp"
-#include "drivers/lidar_decoder.hpp"
 #include "drivers/capture/packet_ring.hpp"
 #include "drivers/capture/stream_consumer.hpp"
+#include "drivers/lidar_decoder.hpp"
 #include "io/udp_socket.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 struct UdpStreamConfig {
   std::string name;  // "lidar", "imu", "data", "position": shown in health
@@ -101,4 +101,4 @@ class LiveSource {
   std::unique_ptr<StreamConsumer> consumer_;
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

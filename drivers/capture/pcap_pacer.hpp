@@ -17,7 +17,7 @@
 #include "core/time.hpp"
 #include "drivers/capture/packet_ring.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 struct PaceOptions {
   double speed = 1.0;  // 1 = recorded pace, 2 = twice as fast; must be > 0
@@ -60,4 +60,4 @@ struct RingRoute {
 PaceResult push_pcap_paced(const std::filesystem::path& capture, std::span<const RingRoute> routes,
                            const PaceOptions& options, const std::stop_token& stop = {});
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

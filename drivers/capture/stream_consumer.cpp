@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 DecoderCounters sum(const DecoderCounters& a, const DecoderCounters& b) {
   DecoderCounters s;
@@ -68,4 +68,4 @@ DecoderCounters StreamConsumer::decoder_counters() const {
   return sum(retired_, decoder_->counters());
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

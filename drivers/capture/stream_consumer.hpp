@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "core/time.hpp"
-#include "drivers/lidar_decoder.hpp"
 #include "drivers/capture/packet_ring.hpp"
+#include "drivers/lidar_decoder.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 struct ConsumerCounters {
   std::uint64_t packets = 0;            // popped from the rings and decoded
@@ -60,4 +60,4 @@ class StreamConsumer {
 // Field-by-field sum (totals over several decoders).
 [[nodiscard]] DecoderCounters sum(const DecoderCounters& a, const DecoderCounters& b);
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

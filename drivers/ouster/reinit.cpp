@@ -6,7 +6,7 @@
 #include "core/error.hpp"
 #include "drivers/ouster/sensor_api.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::ouster {
 
 OusterMetadataFetcher::OusterMetadataFetcher(OusterMetadataFetcherConfig config)
     : config_(std::move(config)) {
@@ -95,7 +95,7 @@ void OusterReinitHandler::ask(HostTime now) {
   last_request_ = now;
 }
 
-void OusterReinitHandler::maintain(StreamConsumer& consumer, HostTime now) {
+void OusterReinitHandler::maintain(capture::StreamConsumer& consumer, HostTime now) {
   auto* decoder = dynamic_cast<ouster::OusterDecoder*>(&consumer.decoder());
   if (decoder == nullptr) return;
   current_reinits_ = decoder->ouster_counters().init_id_changes;
@@ -122,9 +122,9 @@ void OusterReinitHandler::maintain(StreamConsumer& consumer, HostTime now) {
   }
 }
 
-void OusterReinitHandler::note_health(SourceHealth& health) {
+void OusterReinitHandler::note_health(capture::SourceHealth& health) {
   std::uint64_t recoveries = 0;
-  for (const StreamHealth& s : health.streams) recoveries += s.recoveries;
+  for (const capture::StreamHealth& s : health.streams) recoveries += s.recoveries;
   if (recoveries > seen_recoveries_) recovered_ = true;
   seen_recoveries_ = recoveries;
   health.sensor_reinits = sensor_reinits();
@@ -136,4 +136,4 @@ std::uint64_t OusterReinitHandler::sensor_reinits() const {
   return retired_reinits_ + current_reinits_;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::ouster

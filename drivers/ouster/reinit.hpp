@@ -23,11 +23,11 @@
 
 #include "core/time.hpp"
 #include "drivers/capture/health.hpp"
+#include "drivers/capture/stream_consumer.hpp"
 #include "drivers/ouster/metadata.hpp"
 #include "drivers/ouster/ouster_decoder.hpp"
-#include "drivers/capture/stream_consumer.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::ouster {
 
 struct OusterMetadataFetcherConfig {
   std::string host;  // the sensor's address
@@ -83,11 +83,11 @@ class OusterReinitHandler {
   // Consumer thread, after StreamConsumer::poll(): asks for metadata when the consumer's
   // OusterDecoder reports a re-initialised sensor, and installs a new decoder once it arrives.
   // Does nothing if the consumer's decoder is not an OusterDecoder.
-  void maintain(StreamConsumer& consumer, HostTime now);
+  void maintain(capture::StreamConsumer& consumer, HostTime now);
 
   // Consumer thread, with the source's latest health: a stream that recovered from STALE asks for
   // fresh metadata; writes sensor_reinits, metadata_refreshes and last_error into `health`.
-  void note_health(SourceHealth& health);
+  void note_health(capture::SourceHealth& health);
 
   [[nodiscard]] std::uint64_t sensor_reinits() const;
   [[nodiscard]] std::uint64_t metadata_refreshes() const { return refreshes_; }
@@ -108,4 +108,4 @@ class OusterReinitHandler {
   std::string last_error_;
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::ouster
