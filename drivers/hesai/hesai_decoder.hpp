@@ -132,7 +132,6 @@ class HesaiDecoder final : public LidarDecoder {
   std::int64_t previous_packet_ns_ = 0;
   std::int64_t previous_host_ns_ = 0;
   std::uint16_t previous_last_azimuth_ = 0;
-  bool gap_pending_ = false;
 
   // Assembly: the open turn and the next one (azimuth cut), or one scan (time cut).
   std::array<Assembly, 2> assemblies_;
