@@ -43,8 +43,8 @@ std::size_t packet_size(hs::Model model, bool variant) {
 void check_packet(hs::PacketError e, const hs::HesaiPacket& p) {
   if (e != hs::PacketError::kNone) return;
   if (p.returns < 1 || p.returns > 2) __builtin_trap();
-  for (const auto a : p.azimuth) {
-    if (a >= 36000) __builtin_trap();
+  for (int b = 0; b < hs::traits(p.model).blocks; ++b) {
+    if (p.azimuth[static_cast<std::size_t>(b)] >= 36000) __builtin_trap();
   }
   if (!(p.distance_unit_m > 0.0)) __builtin_trap();
   // A decoded packet encodes back to a packet that decodes to the same fields.
@@ -52,9 +52,23 @@ void check_packet(hs::PacketError e, const hs::HesaiPacket& p) {
   if (hs::decode_packet(p.model, hs::encode_packet(p), again) != hs::PacketError::kNone) {
     __builtin_trap();
   }
-  if (again.azimuth != p.azimuth || again.distance != p.distance ||
-      again.timestamp_ns != p.timestamp_ns || again.udp_sequence != p.udp_sequence) {
+  if (again.timestamp_ns != p.timestamp_ns || again.udp_sequence != p.udp_sequence ||
+      again.returns != p.returns || again.return_mode != p.return_mode) {
     __builtin_trap();
+  }
+  // Only the model's blocks and channels are the packet's (the rest of the fixed-capacity
+  // arrays keeps whatever an earlier, larger packet left).
+  const hs::ModelTraits& t = hs::traits(p.model);
+  for (int b = 0; b < t.blocks; ++b) {
+    if (again.azimuth[static_cast<std::size_t>(b)] != p.azimuth[static_cast<std::size_t>(b)]) {
+      __builtin_trap();
+    }
+    for (int c = 0; c < t.channels; ++c) {
+      if (again.raw_distance(b, c) != p.raw_distance(b, c) ||
+          again.raw_reflectivity(b, c) != p.raw_reflectivity(b, c)) {
+        __builtin_trap();
+      }
+    }
   }
 }
 

@@ -1,7 +1,8 @@
 #include "drivers/hesai/model.hpp"
 
 #include <array>
-#include <cctype>
+
+#include "drivers/lidar_family.hpp"
 
 namespace livod::drivers::hesai {
 namespace {
@@ -15,17 +16,6 @@ constexpr std::array<ModelTraits, 2> kModels{{
     {Model::kPandar40P, "PANDAR40P", PacketLayout::kBlockFlags, 40, 10, 0, 0, 2000, 55'560.0, 0.004,
      40 * 18'000.0},
 }};
-
-bool same_name(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (std::toupper(static_cast<unsigned char>(a[i])) !=
-        std::toupper(static_cast<unsigned char>(b[i]))) {
-      return false;
-    }
-  }
-  return true;
-}
 
 }  // namespace
 
@@ -42,7 +32,7 @@ std::span<const ModelTraits> all_models() {
 
 std::optional<Model> model_from_name(std::string_view name) {
   for (const auto& t : kModels) {
-    if (same_name(t.name, name)) return t.model;
+    if (normalise_model_name(t.name) == normalise_model_name(name)) return t.model;
   }
   return std::nullopt;
 }

@@ -41,8 +41,8 @@ struct ModelTraits {
 [[nodiscard]] const ModelTraits& traits(Model model);
 [[nodiscard]] std::span<const ModelTraits> all_models();
 
-// Canonical name ("PANDARXT32", "PANDAR40P"), case-insensitive (aliases: the family table).
-// nullopt if unknown.
+// Canonical name ("PANDARXT32", "PANDAR40P"), spelling-insensitive (drivers::normalise_model_name;
+// aliases: the family table). nullopt if unknown.
 [[nodiscard]] std::optional<Model> model_from_name(std::string_view name);
 
 }  // namespace livod::drivers::hesai

@@ -84,7 +84,8 @@ inline constexpr std::size_t kPacketErrorKinds = 7;
 [[nodiscard]] const char* to_string(PacketError e);
 
 // Decodes one UDP payload of `model`. Anything that is not exactly that model's point cloud
-// packet is an error and leaves `out` unusable.
+// packet is an error and leaves `out` unusable. Only the model's blocks and channels are written:
+// entries beyond them keep what an earlier packet left.
 [[nodiscard]] PacketError decode_packet(Model model, std::span<const std::byte> payload,
                                         HesaiPacket& out);
 
