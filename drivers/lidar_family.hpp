@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cctype>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -97,6 +98,11 @@ struct LidarFamily {
   std::span<const std::string_view> port_names;  // keys of source.udp.ports
   std::span<const CutMode> cut_modes;            // the first is the default
   DecoderFile file = DecoderFile::kNone;
+  // The largest UDP payload of the point stream and of the other streams (IMU, position, GPS):
+  // the slot sizes of the live path's packet rings (docs/live-capture.md "Sizing"). Ouster's
+  // point packets depend on the metadata (the live source narrows the slot once it has it).
+  std::size_t lidar_datagram_bytes = 0;
+  std::size_t aux_datagram_bytes = 0;
   // Sensor times that count within a period (Velodyne: microseconds past the hour); 0 = a full
   // time.
   std::int64_t sensor_time_wrap_ns = 0;

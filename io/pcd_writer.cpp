@@ -2,9 +2,8 @@
 
 #include <cinttypes>
 #include <cstdio>
-#include <fstream>
 
-#include "core/error.hpp"
+#include "io/output_file.hpp"
 
 namespace livod::io {
 
@@ -34,15 +33,14 @@ std::string pcd_header(const std::vector<PcdField>& fields, std::uint64_t points
 
 void write_pcd_xyz(const std::filesystem::path& path, const std::vector<float>& xyz) {
   const std::size_t n = xyz.size() / 3;
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw Error("cannot create " + path.string());
+  OutputFile file(path, true);
+  std::ostream& out = file.stream();
   out << pcd_header({{"x"}, {"y"}, {"z"}}, n, true);
   // PCD binary data is the points' memory layout: little-endian float32 on every host livod
   // runs on.
   out.write(reinterpret_cast<const char*>(xyz.data()),
             static_cast<std::streamsize>(n * 3 * sizeof(float)));
-  out.flush();
-  if (!out) throw Error("cannot write " + path.string());
+  file.commit();
 }
 
 }  // namespace livod::io

@@ -25,8 +25,8 @@ struct PcdField {
                                      bool binary, const std::string& comment = {},
                                      int count_width = 0);
 
-// x y z float32 points (xyz.size() / 3 of them) as a binary PCD. Throws livod::Error if the file
-// cannot be written.
+// x y z float32 points (xyz.size() / 3 of them) as a binary PCD, written as NAME.partial and
+// renamed when complete (io/output_file.hpp). Throws livod::Error if the file cannot be written.
 void write_pcd_xyz(const std::filesystem::path& path, const std::vector<float>& xyz);
 
 }  // namespace livod::io

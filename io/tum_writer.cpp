@@ -3,8 +3,6 @@
 #include <cinttypes>
 #include <cstdio>
 
-#include "core/error.hpp"
-
 namespace livod::io {
 
 std::string format_seconds(std::int64_t ns) {
@@ -30,22 +28,18 @@ std::string tum_line(std::int64_t t_ns, const Eigen::Matrix3d& R_world_body,
   return format_seconds(t_ns) + pose;
 }
 
-TumWriter::TumWriter(const std::filesystem::path& path, const std::string& comment)
-    : path_(path), out_(path) {
-  if (!out_) throw Error("cannot create " + path.string());
-  if (!comment.empty()) out_ << "# " << comment << '\n';
+TumWriter::TumWriter(const std::filesystem::path& path, const std::string& comment) : file_(path) {
+  if (!comment.empty()) file_.stream() << "# " << comment << '\n';
 }
 
 void TumWriter::write(std::int64_t t_ns, const Eigen::Matrix3d& R_world_body,
                       const Eigen::Vector3d& p_world_body) {
-  out_ << tum_line(t_ns, R_world_body, p_world_body);
+  file_.stream() << tum_line(t_ns, R_world_body, p_world_body);
   ++poses_;
 }
 
 void TumWriter::close() {
-  out_.flush();
-  if (!out_) throw Error("cannot write " + path_.string());
-  out_.close();
+  file_.commit();
 }
 
 }  // namespace livod::io

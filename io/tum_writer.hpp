@@ -2,13 +2,16 @@
 // TUM trajectory files: one line per pose, `t tx ty tz qx qy qz qw`, t in seconds. Times are
 // printed from integer nanoseconds (never through a double: 1.7e9 s in a double only resolves
 // 0.24 us), and the quaternion sign is fixed (w >= 0, TUM leaves it free) so that equal poses
-// give equal bytes. Used by `livod replay` (trajectory.txt) and `livod sim` (groundtruth.txt).
+// give equal bytes. The file is written as NAME.partial and renamed by close()
+// (io/output_file.hpp): an interrupted run never leaves a truncated NAME. Used by `livod replay`
+// (trajectory.txt) and `livod sim` (groundtruth.txt).
 
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <string>
+
+#include "io/output_file.hpp"
 
 namespace livod::io {
 
@@ -24,6 +27,7 @@ class TumWriter {
   // Throws livod::Error if the file cannot be created. A non-empty `comment` is written first as
   // "# comment".
   explicit TumWriter(const std::filesystem::path& path, const std::string& comment = {});
+  TumWriter(TumWriter&&) = delete;
   void write(std::int64_t t_ns, const Eigen::Matrix3d& R_world_body,
              const Eigen::Vector3d& p_world_body);
   // Throws livod::Error if the data could not be written.
@@ -31,8 +35,7 @@ class TumWriter {
   [[nodiscard]] std::size_t poses() const { return poses_; }
 
  private:
-  std::filesystem::path path_;
-  std::ofstream out_;
+  OutputFile file_;
   std::size_t poses_ = 0;
 };
 

@@ -31,9 +31,13 @@ bool MapAccumulator::add(const Eigen::Vector3d& p) {
   std::uint64_t key = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const double c = std::floor(p[axis] * inv_cell_);
-    if (!(std::abs(c) < static_cast<double>(kCoordBias))) return false;  // also NaN
-    const auto biased = static_cast<std::int64_t>(c) + kCoordBias;
-    if (biased <= 0 || biased > kCoordLimit) return false;
+    const auto biased = std::abs(c) < static_cast<double>(kCoordBias)  // false for NaN
+                            ? static_cast<std::int64_t>(c) + kCoordBias
+                            : std::int64_t{0};
+    if (biased <= 0 || biased > kCoordLimit) {
+      ++dropped_outside_;
+      return false;
+    }
     key = (key << 21) | static_cast<std::uint64_t>(biased);
   }
   const std::size_t mask = table_.size() - 1;
@@ -52,6 +56,10 @@ bool MapAccumulator::add(const Eigen::Vector3d& p) {
   xyz_.push_back(static_cast<float>(p.z()));
   if (2 * size() > table_.size()) grow();
   return true;
+}
+
+double MapAccumulator::grid_half_extent_m() const {
+  return static_cast<double>(kCoordBias - 1) / inv_cell_;
 }
 
 void MapAccumulator::grow() {

@@ -74,7 +74,8 @@ struct LiveSourceConfig {
 class LiveSource {
  public:
   // Throws livod::Error if a socket cannot be opened (streams opened so far are stopped again) and
-  // std::invalid_argument for a null decoder or no streams.
+  // std::invalid_argument for no streams. A null decoder is allowed: packets are counted and
+  // dropped until consumer().replace_decoder() installs one (an Ouster without metadata yet).
   LiveSource(const LiveSourceConfig& config, std::unique_ptr<LidarDecoder> decoder);
   ~LiveSource();
   LiveSource(const LiveSource&) = delete;

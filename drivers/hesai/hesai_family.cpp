@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "drivers/hesai/hesai_decoder.hpp"
+#include "drivers/hesai/packet.hpp"
 
 namespace livod::drivers::hesai {
 namespace {
@@ -18,8 +19,18 @@ constexpr std::array<std::string_view, 1> kXt32Aliases{"XT32"};
 constexpr std::array<LidarModelInfo, 2> kModels{{
     {"PANDARXT32", kXt32Aliases, "Hesai PandarXT-32 (needs its angle correction file)", 32,
      640'000.0, 10.0, 0.05, 120.0, 0.01, std::nullopt, false, kPorts},
-    {"PANDAR40P", {}, "Hesai Pandar40P (needs its angle correction file)", 40, 720'000.0,
-     10.0, 0.3, 200.0, 0.02, std::nullopt, false, kPorts},
+    {"PANDAR40P",
+     {},
+     "Hesai Pandar40P (needs its angle correction file)",
+     40,
+     720'000.0,
+     10.0,
+     0.3,
+     200.0,
+     0.02,
+     std::nullopt,
+     false,
+     kPorts},
 }};
 constexpr std::array<std::string_view, 2> kPortNames{"lidar", "position"};
 constexpr std::array<CutMode, 2> kCuts{CutMode::kAzimuth, CutMode::kTime};
@@ -84,6 +95,8 @@ const LidarFamily& hesai_family() {
       .port_names = kPortNames,
       .cut_modes = kCuts,
       .file = DecoderFile::kCalibrationRequired,
+      .lidar_datagram_bytes = kPandar40pPacketSizeWithSequence,
+      .aux_datagram_bytes = kGpsPacketSize,
       .sensor_time_wrap_ns = 0,
       .read_settings = &read_settings,
       .make_decoder = &make,

@@ -15,6 +15,10 @@ using drivers::UdpPorts;
 // Host ports livod asks for / the vendor defaults: SDK1's first device has data and IMU on 56001
 // (command 55501); Mid-360 56301/56401 (command 56101, push 56201); HAP 57000/58000 (command
 // 56000). sensor-protocols.md 1.1, 2.1.
+// The largest datagrams: SDK1 dual-return Cartesian points (18 + 96 x 14 = 1362 bytes), SDK2 the
+// HAP's / Mid-360's 96-point packets (36 + 96 x 14 = 1380 bytes).
+constexpr std::size_t kSdk1MaxDatagramBytes = 1362;
+constexpr std::size_t kSdk2MaxDatagramBytes = 1380;
 constexpr UdpPorts kSdk1Ports{.lidar = 56001, .imu = 56001, .command = 55501};
 constexpr UdpPorts kMid360Ports{.lidar = 56301, .imu = 56401, .command = 56101, .push = 56201};
 constexpr UdpPorts kHapPorts{.lidar = 57000, .imu = 58000, .command = 56000};
@@ -182,6 +186,8 @@ const drivers::LidarFamily& livox_sdk1_family() {
       .port_names = kSdk1PortNames,
       .cut_modes = kCuts,
       .file = drivers::DecoderFile::kNone,
+      .lidar_datagram_bytes = kSdk1MaxDatagramBytes,
+      .aux_datagram_bytes = kSdk1MaxDatagramBytes,
       .sensor_time_wrap_ns = 0,
       .read_settings = nullptr,
       .make_decoder = &make_livox_decoder,
@@ -198,6 +204,8 @@ const drivers::LidarFamily& livox_sdk2_family() {
       .port_names = kSdk2PortNames,
       .cut_modes = kCuts,
       .file = drivers::DecoderFile::kNone,
+      .lidar_datagram_bytes = kSdk2MaxDatagramBytes,
+      .aux_datagram_bytes = kSdk2MaxDatagramBytes,
       .sensor_time_wrap_ns = 0,
       .read_settings = nullptr,
       .make_decoder = &make_livox_decoder,

@@ -1,6 +1,5 @@
 #include "drivers/ouster/ouster_family.hpp"
 
-#include "core/error.hpp"
 #include "drivers/ouster/ouster_factory.hpp"
 
 namespace livod::drivers::ouster {
@@ -51,9 +50,6 @@ constexpr std::array<std::string_view, 2> kPortNames{"lidar", "imu"};
 constexpr std::array<CutMode, 1> kCuts{CutMode::kFrameId};
 
 std::unique_ptr<LidarDecoder> make(const LidarDecoderConfig& config) {
-  if (config.cut && config.cut->mode != CutMode::kFrameId) {
-    throw Error("the Ouster decoder cuts scans by frame id only (frame_cut: {mode: frame_id})");
-  }
   return make_ouster_decoder(config);
 }
 
@@ -68,6 +64,10 @@ const LidarFamily& ouster_family() {
       .port_names = kPortNames,
       .cut_modes = kCuts,
       .file = DecoderFile::kMetadata,
+      // Before the metadata is known: the largest profile (128 beams, dual return, 16 columns)
+      // is about 33 KB. IMU packets: 48 B (LEGACY) to ~2.5 KB (ACCEL32_GYRO32_NMEA).
+      .lidar_datagram_bytes = 34 * 1024,
+      .aux_datagram_bytes = 4096,
       .sensor_time_wrap_ns = 0,
       .read_settings = nullptr,
       .make_decoder = &make,

@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "drivers/velodyne/velodyne_decoder.hpp"
+#include "drivers/velodyne/wire.hpp"
 
 namespace livod::drivers::velodyne {
 namespace {
@@ -103,7 +104,9 @@ const LidarFamily& velodyne_family() {
       .port_names = kPortNames,
       .cut_modes = kCuts,
       .file = DecoderFile::kCalibrationOptional,
-      .sensor_time_wrap_ns = 3'600'000'000'000LL,  // microseconds past the top of the hour
+      .lidar_datagram_bytes = wire::kDataPacketSize,
+      .aux_datagram_bytes = wire::kPositionPacketSize,  // position packets (port 8308)
+      .sensor_time_wrap_ns = 3'600'000'000'000LL,       // microseconds past the top of the hour
       .read_settings = &read_settings,
       .make_decoder = &make,
   };
