@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "drivers/ouster/ouster_family.hpp"
 
 namespace livod::drivers::ouster {
 namespace {
@@ -53,8 +54,10 @@ OusterDecoder::OusterDecoder(SensorMetadata metadata, OusterDecoderOptions optio
 
 std::vector<std::uint16_t> OusterDecoder::default_ports() const {
   std::vector<std::uint16_t> ports;
-  const std::uint16_t lidar = metadata_.udp_port_lidar.value_or(7502);
-  const std::uint16_t imu = metadata_.udp_port_imu.value_or(7503);
+  // Without ports in the metadata: the family table's defaults (ouster_family.cpp).
+  const UdpPorts& defaults = ouster_family().models.front().ports;
+  const std::uint16_t lidar = metadata_.udp_port_lidar.value_or(defaults.lidar);
+  const std::uint16_t imu = metadata_.udp_port_imu.value_or(defaults.imu);
   // Port 0 means "stream disabled" in the sensor config (e.g. imu_zm_no_lidar).
   if (lidar != 0) ports.push_back(lidar);
   if (imu != 0 && imu != lidar) ports.push_back(imu);

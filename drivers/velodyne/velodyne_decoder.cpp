@@ -5,13 +5,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "drivers/velodyne/velodyne_family.hpp"
 #include "drivers/velodyne/wire.hpp"
 
 namespace livod::drivers::velodyne {
 namespace {
 
-constexpr std::uint16_t kDataPort = 2368;  // VROS velodyne_driver input.h
-constexpr std::uint16_t kPositionPort = 8308;
 constexpr int kHalfTurn = 18000;  // 0.01 degree
 constexpr std::int64_t kHalfHourUs = 1'800'000'000;
 // Consecutive packets further apart than this are not used to estimate a rotation rate.
@@ -48,7 +47,9 @@ VelodyneDecoder::VelodyneDecoder(const VelodyneOptions& options)
     : VelodyneDecoder(options, calibration_for(options)) {}
 
 std::vector<std::uint16_t> VelodyneDecoder::default_ports() const {
-  return {kDataPort, kPositionPort};
+  // The family table's vendor defaults (velodyne_family.cpp), the same for every model.
+  const UdpPorts& ports = velodyne_family().models.front().ports;
+  return {ports.lidar, ports.position};
 }
 
 std::string VelodyneDecoder::model_name() const {
