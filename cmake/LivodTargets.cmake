@@ -105,7 +105,8 @@ function(livod_add_netns_test name)
   set_tests_properties(${name} PROPERTIES
     SKIP_RETURN_CODE 77
     LABELS "netns;${ARG_LABELS}"
-    ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR};${ARG_ENVIRONMENT}")
+    ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR};${ARG_ENVIRONMENT}"
+    ENVIRONMENT_MODIFICATION "LIVOD_SOURCE_DIR=set:${PROJECT_SOURCE_DIR}")
   if(ARG_TIMEOUT)
     set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT})
   endif()

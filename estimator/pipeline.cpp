@@ -64,10 +64,27 @@ void LioPipeline::add_imu(const ImuSample& sample) {
   }
   prev_imu_ = sample;
   have_prev_imu_ = true;
+  // The initialisation ends at this sample or a later one: scans ending by now precede it.
+  while (!early_scans_.empty() &&
+         MeasurementSync::scan_end(early_scans_.front()) <= sample.stamp.mapped) {
+    early_scans_.pop_front();
+    ++counters_.scans_before_init;
+  }
   if (initializer_.add(sample)) {
     belief_ = *initializer_.result();
     state_time_ = initializer_.time();
     sync_.start(state_time_);
+    // The scans that end after the initialisation are the filter's first, whichever arrived
+    // first: replay (time order) and live (arrival order) start from the same scan.
+    for (LidarScan& scan : early_scans_) {
+      if (MeasurementSync::scan_end(scan) <= state_time_) {
+        ++counters_.scans_before_init;
+        continue;
+      }
+      --init_counters_.scans_in;  // the sync counts it again
+      sync_.add_scan(std::move(scan));
+    }
+    early_scans_.clear();
   }
 }
 
@@ -77,7 +94,16 @@ void LioPipeline::add_scan(LidarScan scan) {
     return;
   }
   ++init_counters_.scans_in;
-  if (!scan.empty()) ++counters_.scans_before_init;
+  if (scan.empty()) return;
+  if (have_prev_imu_ && MeasurementSync::scan_end(scan) <= prev_imu_.stamp.mapped) {
+    ++counters_.scans_before_init;
+    return;
+  }
+  early_scans_.push_back(std::move(scan));
+  if (early_scans_.size() > options_.max_queued_scans) {
+    early_scans_.pop_front();
+    ++counters_.scans_before_init;
+  }
 }
 
 PipelineCounters LioPipeline::counters() const {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <span>
@@ -146,6 +147,10 @@ class LioPipeline {
     std::uint64_t imu_in = 0;
     std::uint64_t imu_out_of_order = 0;
   } init_counters_;  // input while the IMU initialisation is pending
+  // Scans that arrived while the initialisation was pending and end after every IMU sample seen:
+  // whether they precede the initialisation is only known once it ends (live, the LiDAR and the
+  // IMU arrive through different sockets, so arrival order is not time order).
+  std::deque<LidarScan> early_scans_;
   ImuPoseTrack track_;
   std::vector<std::uint32_t> indices_;
   std::vector<std::uint32_t> ring_counts_;  // valid points seen per ring (point_filter_num)
