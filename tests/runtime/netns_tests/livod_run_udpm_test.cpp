@@ -1,10 +1,11 @@
 // The real `livod run` process end to end, inside the private network namespace that
 // scripts/netns-run.sh provides (loopback only, multicast routed to lo: nothing leaves the
-// machine). The test is the robot: it streams a simulated Ouster capture over UDP to the daemon's
-// configured ports at the recorded pace, and a real `lcm-logger` records what the daemon
-// broadcasts over udpm, as lcm-spy would see it. The decoded log must hold one pose per scan equal
-// to `livod replay`'s of the same capture, IMU-rate poses at the IMU rate and health without loss;
-// SIGTERM then stops the daemon within 2 s with its configured trajectory complete.
+// machine). The test is the robot: it streams a simulated capture of each LiDAR family with its
+// internal IMU (Ouster IMU port, Velodyne HDL-32E position packets, Livox Mid-360 IMU packets)
+// over UDP to the daemon's default ports at the recorded pace, and a real `lcm-logger` records
+// what the daemon broadcasts over udpm, as lcm-spy would see it. The decoded log must hold one pose
+// per scan equal to `livod replay`'s of the same capture, IMU-rate poses at the IMU rate and health
+// without loss; SIGTERM then stops the daemon within 2 s with its configured trajectory complete.
 
 #include <gtest/gtest.h>
 
@@ -12,11 +13,13 @@
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "io/lcm_log.hpp"
+#include "io/pcap.hpp"
 #include "lcmtypes/livod/health_t.hpp"
 #include "lcmtypes/livod/pose_t.hpp"
 #include "tests/replay/sim_replay.hpp"
@@ -33,25 +36,25 @@ using daemon::publish::PoseRecord;
 using daemon::publish::PoseStatus;
 
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
-constexpr std::uint16_t kOusterLidarPort = 7502;
-constexpr std::uint16_t kOusterImuPort = 7503;
 
 bool inside_private_namespace() {
   const char* flag = std::getenv("LIVOD_NETNS");
   return flag != nullptr && std::string(flag) == "1";
 }
 
-// The simulator's configuration with the Ouster turned into a live UDP source on loopback (its
-// default ports), LCM on udpm, health five times a second and the trajectory in `trajectory`.
+// The simulator's configuration with its LiDAR turned into a live UDP source on loopback (the
+// driver's default ports, those of the capture), LCM on udpm, health five times a second and the
+// trajectory in `trajectory`.
 std::filesystem::path write_live_config(const std::filesystem::path& folder,
+                                        const std::string& lidar,
                                         const std::filesystem::path& trajectory) {
   std::string text = test::read_text_file(folder / "config.yaml");
-  const std::string replay = "      replay: {file: os1.pcap}\n";
+  const std::string replay = "      replay: {file: " + lidar + ".pcap}\n";
   const auto at = text.find(replay);
   if (at == std::string::npos) throw std::runtime_error("unexpected simulator configuration");
   text.replace(at, replay.size(),
                "      udp: {bind_address: 127.0.0.1, sensor_address: 127.0.0.1,\n"
-               "            ports: {lidar: 7502, imu: 7503}, socket_buffer_bytes: 16777216}\n");
+               "            socket_buffer_bytes: 16777216}\n");
   const std::string outputs = "outputs:\n  trajectory: trajectory.txt\n";
   const auto o = text.find(outputs);
   if (o == std::string::npos) throw std::runtime_error("unexpected simulator outputs");
@@ -119,27 +122,46 @@ Recorded read_log(const std::filesystem::path& log) {
   return r;
 }
 
-TEST(LivodRunProcess, BroadcastsOverUdpmThePosesReplayComputes) {
+// Every destination port of a capture, sent to the same port on loopback.
+std::vector<test::UdpRoute> same_ports(const std::filesystem::path& pcap) {
+  std::set<std::uint16_t> ports;
+  io::PcapReader reader(pcap);
+  while (const auto d = reader.next()) ports.insert(d->dst_port);
+  std::vector<test::UdpRoute> routes;
+  for (const auto p : ports) routes.push_back({p, p});
+  return routes;
+}
+
+struct Rig {
+  const char* scenario;
+  double imu_rate_hz;  // the LiDAR's internal IMU
+};
+
+class LivodRunProcess : public testing::TestWithParam<Rig> {};
+
+TEST_P(LivodRunProcess, BroadcastsOverUdpmThePosesReplayComputes) {
   ASSERT_TRUE(inside_private_namespace())
       << "sends multicast: run through scripts/netns-run.sh (ctest does)";
-  const sim::Scenario scenario = sim::make_scenario("room_handheld_os1_64");
+  const sim::Scenario scenario = sim::make_scenario(GetParam().scenario);
+  const std::string lidar = scenario.lidars.front().name;
   const auto folder = test::simulate(scenario, 8.0, "run-udpm");
   const auto replayed = test::replay(folder / "config.yaml", test::temp_dir("run-udpm-replay"));
   const auto trajectory = eval::read_tum(replayed.trajectory);
   const auto out = test::temp_dir("run-udpm-out");
   const auto live_trajectory = out / "trajectory.txt";
-  const auto config = write_live_config(folder, live_trajectory);
+  const auto config = write_live_config(folder, lidar, live_trajectory);
+  const auto pcap = folder / (lidar + ".pcap");
+  const double imu_rate_hz = GetParam().imu_rate_hz;
 
-  test::LcmLoggerProcess logger(kUrl, out / "run.lcmlog");
+  // A 4 MiB receive buffer: a logger starved of CPU by parallel tests must not lose datagrams.
+  test::LcmLoggerProcess logger(kUrl + "&recv_buf_size=4194304", out / "run.lcmlog");
   const auto daemon_log = out / "livod.log";
   test::ChildProcess livod({LIVOD_BINARY, "run", "--config", config.string()},
                            {.output = daemon_log, .environment = {}});
   ASSERT_TRUE(wait_for_text(daemon_log, "ready", std::chrono::seconds(30)))
       << test::read_text_file(daemon_log);
 
-  const test::SenderResult sent =
-      test::send_capture(folder / "os1.pcap",
-                         {{kOusterLidarPort, kOusterLidarPort}, {kOusterImuPort, kOusterImuPort}});
+  const test::SenderResult sent = test::send_capture(pcap, same_ports(pcap));
   EXPECT_GT(sent.sent, 1000U);
   std::this_thread::sleep_for(std::chrono::seconds(1));
 
@@ -177,19 +199,27 @@ TEST(LivodRunProcess, BroadcastsOverUdpmThePosesReplayComputes) {
       "[run] %zu poses over udpm (replay %zu, dropped %zu), max |dp| %.3f mm, |dR| %.4f deg\n", n,
       replayed.summary.frames, dropped, 1e3 * c.max_position_m, c.max_rotation_deg);
 
-  // IMU-rate poses at the OS1's 100 Hz IMU rate.
+  // IMU-rate poses at the LiDAR's IMU rate.
   ASSERT_GT(r.imu_ns.size(), 100U);
   const double span_s = static_cast<double>(r.imu_ns.back() - r.imu_ns.front()) * 1e-9;
   const double rate = static_cast<double>(r.imu_ns.size() - 1) / span_s;
-  EXPECT_NEAR(rate, 100.0, 10.0);
+  EXPECT_NEAR(rate, imu_rate_hz, 0.1 * imu_rate_hz);
   std::printf("[run] %zu IMU-rate poses at %.1f Hz; stopped %.2f s after SIGTERM\n",
               r.imu_ns.size(), rate, stop_s);
 
-  // The configured trajectory is complete: one row per pose, no partial file left.
+  // The configured trajectory is complete: one row per pose sent, no partial file left.
   EXPECT_FALSE(std::filesystem::exists(live_trajectory.string() + ".partial"));
   const auto written = eval::read_tum(live_trajectory);
   EXPECT_EQ(written.size(), n);
 }
+
+INSTANTIATE_TEST_SUITE_P(EachFamily, LivodRunProcess,
+                         testing::Values(Rig{"room_handheld_os1_64", 100.0},
+                                         Rig{"street_vehicle_hdl32e", 200.0},
+                                         Rig{"room_handheld_mid360", 200.0}),
+                         [](const testing::TestParamInfo<Rig>& rig) {
+                           return std::string(rig.param.scenario);
+                         });
 
 }  // namespace
 }  // namespace livod
