@@ -1,6 +1,7 @@
 // A sensor stand-in for the daemon benchmarks (bench/daemon_bench.sh): sends a capture's UDP
 // payloads to 127.0.0.1 at their recorded pace (or `--speed` times faster), the destination port
-// of each datagram kept, through drivers::send_pcap_paced (the pacer the runtime tests use).
+// of each datagram kept, through drivers::capture::send_pcap_paced (the pacer the runtime tests
+// use).
 //
 //   ./pcap_udp_sender CAPTURE.pcap [--speed S] [--repeat N]
 //
@@ -23,7 +24,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::filesystem::path capture = argv[1];
-  livod::drivers::PaceOptions options;
+  livod::drivers::capture::PaceOptions options;
   int repeat = 1;
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
@@ -46,11 +47,11 @@ int main(int argc, char** argv) {
     livod::io::PcapReader reader(capture);
     while (const auto d = reader.next()) ports.insert(d->dst_port);
   }
-  std::vector<livod::drivers::UdpRoute> routes;
+  std::vector<livod::drivers::capture::UdpRoute> routes;
   for (const auto p : ports) routes.push_back({p, 0x7F000001, p});
 
   for (int r = 0; r < repeat; ++r) {
-    const auto result = livod::drivers::send_pcap_paced(capture, routes, options);
+    const auto result = livod::drivers::capture::send_pcap_paced(capture, routes, options);
     std::printf(
         "sent %llu of %llu datagrams (%llu failed) over %.1f s of recording at speed %.2f; "
         "worst lateness %.2f ms\n",

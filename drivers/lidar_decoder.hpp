@@ -32,6 +32,10 @@ struct DecoderCounters {
   // past the next scan's first packet): dropped, so that a late packet neither splits the scan
   // under construction nor becomes a scan of its own.
   std::uint64_t late_points = 0;
+  // The sensor clock jumped (time sync gained or lost, timestamp type changed, reset): a clock
+  // event, not a loss. The timeline restarts at the new time and no packets are counted missing
+  // across the jump (the clock domain downstream sees the step and restarts its estimate).
+  std::uint64_t clock_jumps = 0;
 };
 
 // Callbacks receive references valid only during the call (the decoder reuses its buffers).

@@ -14,6 +14,7 @@
 #include <variant>
 #include <vector>
 
+#include "drivers/lidar_family.hpp"
 #include "estimator/params.hpp"
 
 namespace livod::daemon {
@@ -25,6 +26,7 @@ enum class Driver {
   velodyne,
   livox_sdk1,
   livox_sdk2,
+  hesai,
   v4l2,
   aravis,
   can_imu,
@@ -40,14 +42,9 @@ SensorKind sensor_kind(Driver driver);
 // LiDARs decoded from their UDP packets (as opposed to decoded point clouds from a recording).
 bool is_packet_lidar(Driver driver);
 
-// Which local UDP ports a sensor's streams arrive on; 0 = the driver has no such stream.
-struct UdpPorts {
-  std::uint16_t lidar = 0;     // point packets
-  std::uint16_t imu = 0;       // internal IMU (Ouster, Livox; may equal lidar)
-  std::uint16_t position = 0;  // Velodyne position/telemetry packets
-  std::uint16_t command = 0;   // Livox host command/control port
-  std::uint16_t push = 0;      // Livox SDK2 status push port
-};
+// Which local UDP ports a sensor's streams arrive on; 0 = the driver has no such stream (the
+// LiDAR families' tables give the defaults: drivers/lidar_family.hpp).
+using UdpPorts = drivers::UdpPorts;
 
 struct UdpSourceConfig {
   std::string bind_address = "0.0.0.0";
@@ -193,11 +190,12 @@ struct DatasetConfig {
 struct SensorConfig {
   std::string name;
   Driver driver = Driver::ouster;
-  std::string model;  // canonical spelling for LiDARs (e.g. "OS1-64", "VLP-16", "MID-360")
+  std::string model;  // canonical spelling for LiDARs (e.g. "OS1-64", "VLP-16", "PANDARXT32")
   bool enabled = true;
   SourceConfig source;
-  std::filesystem::path metadata;     // ouster: metadata JSON (empty = fetch over HTTP)
-  std::filesystem::path calibration;  // velodyne: calibration XML/YAML (empty = built-in)
+  std::filesystem::path metadata;         // ouster: metadata JSON (empty = fetch over HTTP)
+  std::filesystem::path calibration;      // velodyne: XML/YAML (empty = built-in); hesai: angle CSV
+  drivers::LidarSettings lidar_settings;  // the LiDAR family's own section (velodyne:, hesai:)
   FrameCutConfig frame_cut;
   std::optional<ExtrinsicConfig> extrinsic;
   // Resolved through relative_to chains; identity for the body IMU (and for its LiDAR when the

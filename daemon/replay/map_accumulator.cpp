@@ -7,7 +7,6 @@
 
 #include "core/error.hpp"
 #include "core/hash_mix.hpp"
-#include "io/output_file.hpp"
 
 namespace livod::daemon::replay {
 namespace {
@@ -78,20 +77,6 @@ void MapAccumulator::grow() {
 
 std::size_t MapAccumulator::bytes() const {
   return xyz_.capacity() * sizeof(float) + table_.capacity() * sizeof(std::uint64_t);
-}
-
-void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
-  const std::size_t n = xyz.size() / 3;
-  io::OutputFile file(path, true);
-  std::ostream& out = file.stream();
-  out << "# .PCD v0.7 - Point Cloud Data file format\n"
-      << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
-  // PCD binary data is the points' memory layout: little-endian float32 on every host livod
-  // runs on.
-  out.write(reinterpret_cast<const char*>(xyz.data()),
-            static_cast<std::streamsize>(n * 3 * sizeof(float)));
-  file.commit();
 }
 
 }  // namespace livod::daemon::replay

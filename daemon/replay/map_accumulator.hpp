@@ -15,6 +15,8 @@
 #include <filesystem>
 #include <vector>
 
+#include "io/pcd_writer.hpp"
+
 namespace livod::daemon::replay {
 
 class MapAccumulator {
@@ -46,8 +48,10 @@ class MapAccumulator {
   std::uint64_t dropped_outside_ = 0;
 };
 
-// Writes x y z float32 points as a binary PCD v0.7 file (the header PCL and CloudCompare read).
-// Throws livod::Error if the file cannot be written.
-void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz);
+// Writes x y z float32 points as a binary PCD v0.7 file (io/pcd_writer.hpp). Throws livod::Error
+// if the file cannot be written.
+inline void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
+  io::write_pcd_xyz(path, xyz);
+}
 
 }  // namespace livod::daemon::replay

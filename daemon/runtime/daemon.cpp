@@ -41,7 +41,7 @@ struct OpenedSources {
 };
 
 OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
-                        const DaemonOptions& options, drivers::Doorbell& wake) {
+                        const DaemonOptions& options, drivers::capture::Doorbell& wake) {
   OpenedSources out;
   LiveOptions lo;
   if (config.realtime.capture_priority > 0) lo.capture_priority = config.realtime.capture_priority;
@@ -59,7 +59,7 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
     }
     if (!is_packet_lidar(s.driver) || !std::holds_alternative<UdpSourceConfig>(s.source)) {
       throw Error(what + ": live operation is implemented for packet LiDARs over UDP (ouster, " +
-                  "velodyne, livox_sdk1, livox_sdk2) and their internal IMUs");
+                  "velodyne, livox_sdk1, livox_sdk2, hesai) and their internal IMUs");
     }
     auto source = open_live_lidar(s, lo);
     for (const auto& [stream, port] : source->local_ports()) {
@@ -76,7 +76,7 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
 }
 
 OpenedSources open_paced(const LivodConfig& config, const SensorRoles& roles,
-                         const DaemonOptions& options, drivers::Doorbell& wake) {
+                         const DaemonOptions& options, drivers::capture::Doorbell& wake) {
   const auto recordings = replay::assign_recordings(config, options.inputs);
   struct Pending {
     std::size_t index;
@@ -139,7 +139,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
     if (const auto refused = lock_memory(); !refused.empty()) spdlog::warn("{}", refused);
   }
 
-  drivers::Doorbell wake;  // capture/pacer threads -> scheduler
+  drivers::capture::Doorbell wake;  // capture/pacer threads -> scheduler
   OpenedSources opened = options.paced_replay ? open_paced(config, roles, options, wake)
                                               : open_live(config, roles, options, wake);
 

@@ -15,9 +15,11 @@
 #include "drivers/imu/candump_frames.hpp"
 #include "drivers/imu/sbg_can.hpp"
 #include "drivers/imu/xsens_mtdata2.hpp"
+#include "drivers/lidar_family.hpp"
 #include "io/candump.hpp"
 #include "io/pcap.hpp"
 #include "io/serial_capture.hpp"
+#include "io/tum_writer.hpp"
 #include "tools/sim/bag_output.hpp"
 #include "tools/sim/lidar_registry.hpp"
 #include "tools/sim/worlds.hpp"
@@ -63,22 +65,6 @@ std::int64_t epoch_ns(double host_epoch_s) {
   return static_cast<std::int64_t>(std::llround(host_epoch_s * 1e9));
 }
 
-// A host clock stamp in seconds with all nine decimals (TUM files are in seconds).
-std::string format_ns_as_seconds(std::int64_t ns) {
-  std::ostringstream os;
-  os << ns / 1'000'000'000 << '.' << std::setw(9) << std::setfill('0') << ns % 1'000'000'000;
-  return os.str();
-}
-
-std::string format_pose_row(std::int64_t t_ns, const Eigen::Vector3d& p, const Eigen::Matrix3d& R) {
-  const Eigen::Quaterniond q(R);
-  std::ostringstream os;
-  os << format_ns_as_seconds(t_ns) << std::fixed << std::setprecision(9) << ' ' << p.x() << ' '
-     << p.y() << ' ' << p.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w()
-     << '\n';
-  return os.str();
-}
-
 std::string yaml_vec(const Eigen::Vector3d& v) {
   std::ostringstream os;
   os << std::setprecision(12) << '[' << v.x() << ", " << v.y() << ", " << v.z() << ']';
@@ -101,13 +87,11 @@ void write_extrinsic(std::ostream& os, const Eigen::Isometry3d& T) {
      << "      rotation: {matrix: " << yaml_matrix(T.linear()) << "}\n";
 }
 
-const char* lidar_driver(const std::string& model) {
-  if (model.rfind("OS", 0) == 0) return "ouster";
-  if (model == "VLP-16" || model == "VLP-32C" || model == "HDL-32E" || model == "VLS-128") {
-    return "velodyne";
-  }
-  if (model == "MID-360" || model == "HAP") return "livox_sdk2";
-  return "livox_sdk1";
+// The configuration driver of a simulated model: its family's (drivers/lidar_family.hpp).
+const drivers::LidarFamily& lidar_family_of(const std::string& model) {
+  const auto match = drivers::find_model(model);
+  if (!match) throw Error("no LiDAR family has the simulated model '" + model + "'");
+  return *match->family;
 }
 
 // Simulated LiDAR datagrams arrive out of order when a delay spike holds one back; a capture is
@@ -227,9 +211,9 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     report.sensors.push_back({mount.name, "lidar", sink.written(), 0, pcap_path});
     BagLidarSource bag_lidar{mount.name,   mount.model, pcap_path,
                              std::nullopt, mount.clock, mount.imu};
-    for (const auto& f : side_files) {
-      if (f.extension() == ".json") bag_lidar.metadata = f;
-    }
+    // The one file beside the capture is what the family's decoder reads (metadata JSON or
+    // angle correction CSV).
+    if (!side_files.empty()) bag_lidar.decoder_file = side_files.front();
     bag.lidars.push_back(bag_lidar);
   }
 
@@ -387,17 +371,18 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
 
   // Ground truth of the body (IMU) frame on the host clock.
   {
-    std::ofstream gt(options.out_dir / "groundtruth.txt");
-    gt << "# timestamp tx ty tz qx qy qz qw  (livod sim: body/IMU frame in the world frame, "
-          "host clock)\n";
+    io::TumWriter gt(options.out_dir / "groundtruth.txt",
+                     "timestamp tx ty tz qx qy qz qw  (livod sim: body/IMU frame in the world "
+                     "frame, host clock)");
     const double period = 1.0 / scenario.groundtruth_rate_hz;
     const auto n = static_cast<std::int64_t>(std::floor(duration / period)) + 1;
     for (std::int64_t k = 0; k < n; ++k) {
       const double t = static_cast<double>(k) * period;
       const auto s = trajectory.at(t);
-      gt << format_pose_row(epoch_host_ns + to_ns(t), s.p_world, s.R_world_body);
+      gt.write(epoch_host_ns + to_ns(t), s.R_world_body, s.p_world);
       ++report.groundtruth_poses;
     }
+    gt.close();
   }
 
   // A livod configuration that replays the outputs.
@@ -412,12 +397,15 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     cfg << "body_frame: " << scenario.body_imu << (body_is_lidar_imu ? ".imu" : "") << "\n";
     cfg << "sensors:\n";
     for (const auto& mount : scenario.lidars) {
+      const drivers::LidarFamily& family = lidar_family_of(mount.model);
       cfg << "  - name: " << mount.name << "\n"
-          << "    driver: " << lidar_driver(mount.model) << "\n"
+          << "    driver: " << family.driver << "\n"
           << "    model: " << mount.model << "\n"
           << "    source:\n      replay: {file: " << mount.name << ".pcap}\n";
-      if (lidar_driver(mount.model) == std::string("ouster")) {
+      if (family.file == drivers::DecoderFile::kMetadata) {
         cfg << "    metadata: " << mount.name << ".json\n";
+      } else if (family.file == drivers::DecoderFile::kCalibrationRequired) {
+        cfg << "    calibration: " << mount.name << ".csv\n";
       }
       // Only the models with an internal IMU take the key (of the Velodynes, the HDL-32E).
       if (simulated_lidar_has_imu(mount.model)) {

@@ -1,5 +1,7 @@
 #include "tools/sim/scenario.hpp"
 
+#include "core/units.hpp"
+
 #include <array>
 #include <cmath>
 
@@ -172,7 +174,7 @@ LidarMount hdl32e(const std::string& name) {
   m.range.max_range_m = 100.0;
   m.imu_noise.rate_hz = 1.0 / 4.988e-3;  // one sample per position packet (velodyne_sim.hpp)
   m.imu_noise.gyro_noise_density = 0.05 * M_PI / 180.0;
-  m.imu_noise.accel_noise_density = 200e-6 * 9.80665;
+  m.imu_noise.accel_noise_density = 200e-6 * kStandardGravity;
   m.imu_noise.gyro_bias0 = Eigen::Vector3d(-0.092, 0.064, 0.512);
   m.imu_noise.accel_bias0 = Eigen::Vector3d(0.04, -0.03, 0.06);
   return m;

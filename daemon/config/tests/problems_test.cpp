@@ -155,9 +155,14 @@ TEST(ConfigProblems, InvalidValues) {
     EXPECT_NE(p.message.find("(did you mean 'velodyne'?)"), std::string::npos) << p.message;
   }
   {
-    const auto p = only_problem(load(edited("model: VLP-16", "model: VLP16")),
+    const auto p = only_problem(load(edited("model: VLP-16", "model: VLP-61")),
                                 ProblemKind::invalid_value, "sensors[0].model");
     EXPECT_NE(p.message.find("(did you mean 'VLP-16'?)"), std::string::npos) << p.message;
+    // Case, '-', '_' and spaces do not matter (the families' one normalisation, as for
+    // `livod decode`); the canonical spelling is kept.
+    const auto loose = load(edited("model: VLP-16", "model: vlp_16"));
+    EXPECT_TRUE(loose.ok()) << dump(loose);
+    EXPECT_EQ(loose.config.sensors[0].model, "VLP-16");
   }
   only_problem(load(edited("name: lidar", "name: Front-Lidar")), ProblemKind::invalid_value,
                "sensors[0].name");

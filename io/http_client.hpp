@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <string>
 
-namespace livod::drivers::ouster {
+namespace livod::io {
 
 struct HttpResponse {
   int status = 0;  // e.g. 200
@@ -29,4 +29,4 @@ struct HttpGetOptions {
 [[nodiscard]] HttpResponse http_get(const std::string& host, std::uint16_t port,
                                     const std::string& path, const HttpGetOptions& options = {});
 
-}  // namespace livod::drivers::ouster
+}  // namespace livod::io

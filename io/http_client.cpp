@@ -1,4 +1,4 @@
-#include "drivers/ouster/http_client.hpp"
+#include "io/http_client.hpp"
 
 #include <netdb.h>
 #include <poll.h>
@@ -17,7 +17,7 @@
 
 #include "core/error.hpp"
 
-namespace livod::drivers::ouster {
+namespace livod::io {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -271,4 +271,4 @@ HttpResponse http_get(const std::string& host, std::uint16_t port, const std::st
   return response;
 }
 
-}  // namespace livod::drivers::ouster
+}  // namespace livod::io
