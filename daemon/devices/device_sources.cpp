@@ -30,9 +30,9 @@ camera::PixelFormat pixel_format(CameraPixelFormat f) {
   return camera::PixelFormat::kMono8;
 }
 
-drivers::DeviceThreadConfig thread_config(const std::string& prefix, const SensorConfig& sensor,
+drivers::capture::DeviceThreadConfig thread_config(const std::string& prefix, const SensorConfig& sensor,
                                           const LivodConfig& config) {
-  drivers::DeviceThreadConfig t;
+  drivers::capture::DeviceThreadConfig t;
   t.thread_name = prefix + sensor.name;
   if (config.realtime.capture_priority > 0) t.realtime_priority = config.realtime.capture_priority;
   return t;

@@ -7,7 +7,7 @@
 namespace livod::camera {
 
 // The capture-thread side: DeviceLink over the backend, FrameSink over the ring.
-class CameraSource::Link final : public drivers::DeviceLink, public FrameSink {
+class CameraSource::Link final : public drivers::capture::DeviceLink, public FrameSink {
  public:
   Link(CameraBackend& backend, FrameRing& ring, PixelFormat format, int decimation)
       : backend_(backend), ring_(ring), format_(format), decimation_(decimation) {}
@@ -67,7 +67,7 @@ class CameraSource::Link final : public drivers::DeviceLink, public FrameSink {
 };
 
 std::string format_health(const CameraHealth& h) {
-  std::string line = drivers::format_health(h.source);
+  std::string line = drivers::capture::format_health(h.source);
   line += fmt::format(" | frames {} incomplete {} gaps {} convert errors {} ring overruns {}",
                       h.backend.frames, h.backend.incomplete, h.backend.sequence_gaps,
                       h.backend.convert_errors, h.ring_overruns);
@@ -94,12 +94,12 @@ CameraSource::CameraSource(const CameraSourceConfig& config, std::unique_ptr<Cam
     throw std::invalid_argument("CameraSource: width and height must be > 0");
   }
   link_ = std::make_unique<Link>(*backend_, ring_, config.format, std::max(config.decimation, 1));
-  drivers::DeviceThreadConfig thread = config.thread;
+  drivers::capture::DeviceThreadConfig thread = config.thread;
   if (thread.thread_name.empty()) thread.thread_name = "cam:" + config.name;
   if (thread.silence_timeout.count() == 0 && config.reopen_on_silence) {
     thread.silence_timeout = config.stale_after;
   }
-  thread_ = std::make_unique<drivers::DeviceThread>(*link_, thread);
+  thread_ = std::make_unique<drivers::capture::DeviceThread>(*link_, thread);
 }
 
 CameraSource::~CameraSource() {
@@ -118,7 +118,7 @@ void CameraSource::set_gain(double gain) {
   backend_->request({.gain = gain});
 }
 
-drivers::DeviceThreadCounters CameraSource::device_counters() const {
+drivers::capture::DeviceThreadCounters CameraSource::device_counters() const {
   return thread_->counters();
 }
 
@@ -149,7 +149,7 @@ CameraHealth CameraSource::update_health(HostTime now) {
   h.decimated = link_->decimated();
   h.delivered = delivered_;
   h.clock = clock_.stats();
-  drivers::CaptureCounters cc;
+  drivers::capture::CaptureCounters cc;
   cc.datagrams = h.backend.frames;
   cc.bytes = h.backend.bytes;
   // Counters are read one by one while frames flow: never let the difference go below 0.
@@ -163,14 +163,14 @@ CameraHealth CameraSource::update_health(HostTime now) {
   cc.affinity = h.device.affinity;
   cc.priority_error = h.device.priority_error;
   cc.affinity_error = h.device.affinity_error;
-  drivers::SourceHealth& s = h.source;
+  drivers::capture::SourceHealth& s = h.source;
   s.name = name_;
   s.streams.push_back(monitor_.update(now, cc));
   s.decoder.packets = h.backend.frames;
   s.decoder.decode_errors = h.backend.incomplete + h.backend.convert_errors;
   s.decoder.sequence_gaps = h.backend.sequence_gaps;
   s.consumer.packets = h.delivered;
-  s.device_state = drivers::to_string(h.device.state);
+  s.device_state = drivers::capture::to_string(h.device.state);
   s.reconnects = h.device.reconnects;
   s.last_error = thread_->last_error();
   return h;

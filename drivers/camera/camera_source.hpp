@@ -40,7 +40,7 @@ struct CameraSourceConfig {
   std::size_t ring_capacity = 8;  // frames; e.g. 8 x 1280 x 1024 mono8 = 10.5 MB
   int decimation = 1;             // keep every n-th frame
   CameraClockConfig clock;
-  drivers::DeviceThreadConfig thread;  // silence_timeout: set from stale_after unless given
+  drivers::capture::DeviceThreadConfig thread;  // silence_timeout: set from stale_after unless given
   Nanoseconds stale_after{std::chrono::seconds(1)};
   Nanoseconds rate_window{std::chrono::seconds(5)};
   // Hardware-triggered cameras are silent while the trigger is: do not reopen on silence.
@@ -48,9 +48,9 @@ struct CameraSourceConfig {
 };
 
 struct CameraHealth {
-  drivers::SourceHealth
+  drivers::capture::SourceHealth
       source;  // one stream "frames": rate, STALE, drops; device state, reconnects
-  drivers::DeviceThreadCounters device;
+  drivers::capture::DeviceThreadCounters device;
   CameraBackendCounters backend;
   std::uint64_t ring_overruns = 0;
   std::uint64_t decimated = 0;
@@ -80,7 +80,7 @@ class CameraSource {
   void set_exposure(Nanoseconds exposure);
   void set_gain(double gain);
   [[nodiscard]] CameraBackendCounters backend_counters() const { return backend_->counters(); }
-  [[nodiscard]] drivers::DeviceThreadCounters device_counters() const;
+  [[nodiscard]] drivers::capture::DeviceThreadCounters device_counters() const;
   [[nodiscard]] std::uint64_t ring_overruns() const { return ring_.overruns(); }
   [[nodiscard]] const std::string& name() const { return name_; }
   [[nodiscard]] const CameraBackend& backend() const { return *backend_; }
@@ -94,9 +94,9 @@ class CameraSource {
   FrameRing ring_;
   CameraClock clock_;
   std::unique_ptr<Link> link_;
-  drivers::StreamMonitor monitor_;
+  drivers::capture::StreamMonitor monitor_;
   std::uint64_t delivered_ = 0;
-  std::unique_ptr<drivers::DeviceThread> thread_;  // last: joined first
+  std::unique_ptr<drivers::capture::DeviceThread> thread_;  // last: joined first
 };
 
 }  // namespace livod::camera

@@ -6,7 +6,7 @@
 #include <exception>
 #include <utility>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 template <class T>
@@ -175,4 +175,4 @@ DeviceThreadCounters DeviceThread::counters() const {
   return c;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -31,7 +31,7 @@
 #include "core/time.hpp"
 #include "drivers/capture/capture_thread.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 enum class DeviceState : std::uint8_t { kOpening, kStreaming, kLost, kStopped };
 const char* to_string(DeviceState s);
@@ -129,4 +129,4 @@ class DeviceThread {
   std::jthread thread_;  // last: started when everything else is ready
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -30,22 +30,22 @@ drivers::DecoderCounters as_decoder_counters(const ImuDecoderCounters& c) {
   return d;
 }
 
-drivers::SourceHealth make_source_health(const std::string& name, drivers::StreamHealth stream,
-                                         const drivers::DeviceThreadCounters& device,
+drivers::capture::SourceHealth make_source_health(const std::string& name, drivers::capture::StreamHealth stream,
+                                         const drivers::capture::DeviceThreadCounters& device,
                                          const ImuDecoderCounters& decoder, std::uint64_t popped,
                                          std::string last_error) {
-  drivers::SourceHealth h;
+  drivers::capture::SourceHealth h;
   h.name = name;
   h.streams.push_back(std::move(stream));
   h.decoder = as_decoder_counters(decoder);
   h.consumer.packets = popped;
-  h.device_state = drivers::to_string(device.state);
+  h.device_state = drivers::capture::to_string(device.state);
   h.reconnects = device.reconnects;
   h.last_error = std::move(last_error);
   return h;
 }
 
-void copy_scheduling(const drivers::DeviceThreadCounters& d, drivers::CaptureCounters& c) {
+void copy_scheduling(const drivers::capture::DeviceThreadCounters& d, drivers::capture::CaptureCounters& c) {
   c.wakeups = d.wakeups;
   c.priority = d.priority;
   c.affinity = d.affinity;
@@ -56,7 +56,7 @@ void copy_scheduling(const drivers::DeviceThreadCounters& d, drivers::CaptureCou
 }  // namespace
 
 std::string format_health(const ImuSourceHealth& h) {
-  std::string line = drivers::format_health(h.source);
+  std::string line = drivers::capture::format_health(h.source);
   line += " | " + format_counters(h.decoder);
   if (h.bus.error_frames > 0 || h.bus.kernel_drops > 0) {
     line += fmt::format(" | bus errors {} (bus-off {}, passive {}, overflow {}, restarts {})",
@@ -68,7 +68,7 @@ std::string format_health(const ImuSourceHealth& h) {
 
 // ---- CAN -----------------------------------------------------------------------------------
 
-class CanImuSource::Link final : public drivers::DeviceLink {
+class CanImuSource::Link final : public drivers::capture::DeviceLink {
  public:
   Link(std::string interface, SocketOpener opener, SpscRing<CanRecord>& ring)
       : interface_(std::move(interface)), opener_(std::move(opener)), ring_(ring) {}
@@ -199,9 +199,9 @@ CanImuSource::CanImuSource(const CanImuSourceConfig& config, std::unique_ptr<Can
   if (socket.ids.empty()) socket.ids = decoder_->frame_ids();
   if (!opener) opener = [socket] { return CanSocket::open(socket); };
   link_ = std::make_unique<Link>(socket.interface, std::move(opener), ring_);
-  drivers::DeviceThreadConfig thread = config.thread;
+  drivers::capture::DeviceThreadConfig thread = config.thread;
   if (thread.thread_name.empty()) thread.thread_name = "can:" + config.name;
-  thread_ = std::make_unique<drivers::DeviceThread>(*link_, thread);
+  thread_ = std::make_unique<drivers::capture::DeviceThread>(*link_, thread);
 }
 
 CanImuSource::~CanImuSource() {
@@ -229,7 +229,7 @@ CanBusCounters CanImuSource::bus_counters() const {
   return link_->bus();
 }
 
-drivers::DeviceThreadCounters CanImuSource::device_counters() const {
+drivers::capture::DeviceThreadCounters CanImuSource::device_counters() const {
   return thread_->counters();
 }
 
@@ -239,7 +239,7 @@ ImuSourceHealth CanImuSource::update_health(HostTime now) {
   h.device = thread_->counters();
   h.decoder = decoder_->counters();
   h.ring_overruns = ring_.overruns();
-  drivers::CaptureCounters cc;
+  drivers::capture::CaptureCounters cc;
   cc.datagrams = h.bus.frames;
   cc.bytes = h.bus.bytes;
   cc.pushed = link_->pushed();
@@ -256,9 +256,9 @@ ImuSourceHealth CanImuSource::update_health(HostTime now) {
 
 // ---- serial / USB --------------------------------------------------------------------------
 
-class SerialImuSource::Link final : public drivers::DeviceLink {
+class SerialImuSource::Link final : public drivers::capture::DeviceLink {
  public:
-  Link(std::string path, PortOpener opener, drivers::PacketRing& ring, std::size_t chunk_bytes)
+  Link(std::string path, PortOpener opener, drivers::capture::PacketRing& ring, std::size_t chunk_bytes)
       : path_(std::move(path)), opener_(std::move(opener)), ring_(ring), chunk_(chunk_bytes) {}
 
   void open() override { port_ = opener_(); }
@@ -284,9 +284,9 @@ class SerialImuSource::Link final : public drivers::DeviceLink {
   }
   [[nodiscard]] std::string loss_reason() const override { return loss_reason_; }
 
-  drivers::CaptureCounters counters() const {
+  drivers::capture::CaptureCounters counters() const {
     const auto get = [](const auto& a) { return a.load(std::memory_order_relaxed); };
-    drivers::CaptureCounters c;
+    drivers::capture::CaptureCounters c;
     c.datagrams = get(published_.reads);
     c.bytes = get(published_.bytes);
     c.pushed = get(published_.pushed);
@@ -303,7 +303,7 @@ class SerialImuSource::Link final : public drivers::DeviceLink {
 
   std::string path_;
   PortOpener opener_;
-  drivers::PacketRing& ring_;
+  drivers::capture::PacketRing& ring_;
   std::vector<std::byte> chunk_;
   std::unique_ptr<BytePort> port_;
   std::uint64_t reads_ = 0;
@@ -334,9 +334,9 @@ SerialImuSource::SerialImuSource(const SerialImuSourceConfig& config,
     }
   }
   link_ = std::make_unique<Link>(config.path, std::move(opener), ring_, config.chunk_bytes);
-  drivers::DeviceThreadConfig thread = config.thread;
+  drivers::capture::DeviceThreadConfig thread = config.thread;
   if (thread.thread_name.empty()) thread.thread_name = "imu:" + config.name;
-  thread_ = std::make_unique<drivers::DeviceThread>(*link_, thread);
+  thread_ = std::make_unique<drivers::capture::DeviceThread>(*link_, thread);
 }
 
 SerialImuSource::~SerialImuSource() {
@@ -350,7 +350,7 @@ void SerialImuSource::stop() {
 std::size_t SerialImuSource::poll(const ImuSink& sink, std::size_t max_chunks) {
   std::size_t n = 0;
   while (n < max_chunks) {
-    const drivers::RawPacket* p = ring_.front();
+    const drivers::capture::RawPacket* p = ring_.front();
     if (p == nullptr) break;
     decoder_->on_bytes(p->payload, p->rx.ns, sink);
     ring_.pop();
@@ -360,12 +360,12 @@ std::size_t SerialImuSource::poll(const ImuSink& sink, std::size_t max_chunks) {
   return n;
 }
 
-drivers::DeviceThreadCounters SerialImuSource::device_counters() const {
+drivers::capture::DeviceThreadCounters SerialImuSource::device_counters() const {
   return thread_->counters();
 }
 
-drivers::CaptureCounters SerialImuSource::capture_counters() const {
-  drivers::CaptureCounters c = link_->counters();
+drivers::capture::CaptureCounters SerialImuSource::capture_counters() const {
+  drivers::capture::CaptureCounters c = link_->counters();
   copy_scheduling(thread_->counters(), c);
   return c;
 }
@@ -375,7 +375,7 @@ ImuSourceHealth SerialImuSource::update_health(HostTime now) {
   h.device = thread_->counters();
   h.decoder = decoder_->counters();
   h.ring_overruns = ring_.overruns();
-  drivers::CaptureCounters cc = link_->counters();
+  drivers::capture::CaptureCounters cc = link_->counters();
   copy_scheduling(h.device, cc);
   h.source = make_source_health(name_, monitor_.update(now, cc), h.device, h.decoder, popped_,
                                 thread_->last_error());

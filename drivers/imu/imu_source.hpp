@@ -37,8 +37,8 @@
 namespace livod::imu {
 
 struct ImuSourceHealth {
-  drivers::SourceHealth source;  // one stream: state, rate, STALE, drops; device state, reconnects
-  drivers::DeviceThreadCounters device;
+  drivers::capture::SourceHealth source;  // one stream: state, rate, STALE, drops; device state, reconnects
+  drivers::capture::DeviceThreadCounters device;
   ImuDecoderCounters decoder;
   CanBusCounters bus;  // CAN sources only
   std::uint64_t ring_overruns = 0;
@@ -58,7 +58,7 @@ struct CanImuSourceConfig {
   std::string name;  // the sensor's name (health, thread name)
   CanSocketConfig socket;
   std::size_t ring_capacity = 4096;  // frames (~4.5 s of a 300 frames/s IMU)
-  drivers::DeviceThreadConfig thread;
+  drivers::capture::DeviceThreadConfig thread;
   ImuSourceTiming timing;
 };
 
@@ -82,7 +82,7 @@ class CanImuSource {
 
   [[nodiscard]] const CanImuDecoder& decoder() const { return *decoder_; }
   [[nodiscard]] CanBusCounters bus_counters() const;  // any thread
-  [[nodiscard]] drivers::DeviceThreadCounters device_counters() const;
+  [[nodiscard]] drivers::capture::DeviceThreadCounters device_counters() const;
   [[nodiscard]] const std::string& name() const { return name_; }
   void stop();
 
@@ -92,9 +92,9 @@ class CanImuSource {
   std::unique_ptr<CanImuDecoder> decoder_;
   SpscRing<CanRecord> ring_;
   std::unique_ptr<Link> link_;
-  drivers::StreamMonitor monitor_;
+  drivers::capture::StreamMonitor monitor_;
   std::uint64_t popped_ = 0;
-  std::unique_ptr<drivers::DeviceThread> thread_;  // last: joined first
+  std::unique_ptr<drivers::capture::DeviceThread> thread_;  // last: joined first
 };
 
 // ---- serial / USB --------------------------------------------------------------------------
@@ -105,7 +105,7 @@ struct SerialImuSourceConfig {
   int baud_rate = 115200;
   std::size_t ring_capacity = 1024;  // chunks
   std::size_t chunk_bytes = 4096;    // largest read
-  drivers::DeviceThreadConfig thread;
+  drivers::capture::DeviceThreadConfig thread;
   ImuSourceTiming timing;
 };
 
@@ -126,8 +126,8 @@ class SerialImuSource {
   ImuSourceHealth update_health(HostTime now);
 
   [[nodiscard]] const StreamImuDecoder& decoder() const { return *decoder_; }
-  [[nodiscard]] drivers::DeviceThreadCounters device_counters() const;
-  [[nodiscard]] drivers::CaptureCounters capture_counters() const;
+  [[nodiscard]] drivers::capture::DeviceThreadCounters device_counters() const;
+  [[nodiscard]] drivers::capture::CaptureCounters capture_counters() const;
   [[nodiscard]] const std::string& name() const { return name_; }
   void stop();
 
@@ -135,11 +135,11 @@ class SerialImuSource {
   class Link;
   std::string name_;
   std::unique_ptr<StreamImuDecoder> decoder_;
-  drivers::PacketRing ring_;
+  drivers::capture::PacketRing ring_;
   std::unique_ptr<Link> link_;
-  drivers::StreamMonitor monitor_;
+  drivers::capture::StreamMonitor monitor_;
   std::uint64_t popped_ = 0;
-  std::unique_ptr<drivers::DeviceThread> thread_;
+  std::unique_ptr<drivers::capture::DeviceThread> thread_;
 };
 
 }  // namespace livod::imu

@@ -161,7 +161,7 @@ TEST_F(AravisGv, DiscoversControlsAndStreamsAtTheConfiguredRateWithExposureMetad
   ASSERT_TRUE(wait_until(
       *source, cb, [&] { return infos.size() > before + 3 && infos.back().exposure == 3ms; }));
   const auto h = source->update_health(host_now());
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStreaming);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStreaming);
   EXPECT_EQ(h.backend.exposure_ns, 3'000'000);
   EXPECT_EQ(h.backend.control_errors, 0u);
 }
@@ -232,7 +232,7 @@ TEST_F(AravisGv, ACameraKilledAndRestartedGoesStaleAndIsReconnected) {
               std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count());
   std::this_thread::sleep_for(800ms);
   auto h = source->update_health(host_now());
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStale);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStale);
   EXPECT_NE(h.source.device_state, "STREAMING");
   EXPECT_FALSE(h.source.last_error.empty());
 
@@ -246,7 +246,7 @@ TEST_F(AravisGv, ACameraKilledAndRestartedGoesStaleAndIsReconnected) {
   std::printf("streaming again %.2f s after the restart\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - restarted).count());
   h = source->update_health(host_now());
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStreaming);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStreaming);
   EXPECT_GE(h.source.streams.at(0).stale_events, 1u);
   EXPECT_GE(h.source.streams.at(0).recoveries, 1u);
   EXPECT_GE(h.source.reconnects, 1u);

@@ -113,12 +113,12 @@ TEST(CameraSourceThreads, FramesFlowAndACameraUnpluggedAndPluggedBackIsReopened)
   dev->unplug();
   ASSERT_TRUE(wait_for(poll, [&] { return source.device_counters().open_failures >= 2; }))
       << "opens " << source.device_counters().opens << " losses " << source.device_counters().losses
-      << " state " << drivers::to_string(source.device_counters().state) << " error "
+      << " state " << drivers::capture::to_string(source.device_counters().state) << " error "
       << source.update_health(host_now()).source.last_error;
-  EXPECT_EQ(source.device_counters().state, drivers::DeviceState::kLost);
+  EXPECT_EQ(source.device_counters().state, drivers::capture::DeviceState::kLost);
   std::this_thread::sleep_for(200ms);
   h = source.update_health(host_now());
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStale);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStale);
   EXPECT_NE(h.source.last_error.find("/dev/video0"), std::string::npos) << h.source.last_error;
 
   // Plugged back: reopened (format, exposure, buffers again) and streaming, nothing restarted.
@@ -128,7 +128,7 @@ TEST(CameraSourceThreads, FramesFlowAndACameraUnpluggedAndPluggedBackIsReopened)
   EXPECT_EQ(seen.back().sequence, 59u);
   EXPECT_EQ(dev->opens(), 2);
   h = source.update_health(host_now());
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStreaming);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStreaming);
   EXPECT_EQ(h.source.reconnects, 1u);
   EXPECT_EQ(h.source.streams.at(0).stale_events, 1u);
   EXPECT_EQ(h.device.losses, 1u);

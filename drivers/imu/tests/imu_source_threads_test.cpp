@@ -116,18 +116,18 @@ TEST(ImuSourceThreads, CanSourceDecodesReconnectsAfterTheInterfaceVanishes) {
   }
   auto h = source.update_health(host_now());
   EXPECT_EQ(h.source.device_state, "STREAMING");
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStreaming);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStreaming);
   EXPECT_EQ(h.bus.frames, 150u);
   EXPECT_EQ(h.decoder.samples, 50u);
 
   // The interface goes away: LOST, reopen attempts fail and are counted, STALE in health.
   bus.unplug();
   ASSERT_TRUE(wait_for(poll, [&] { return source.device_counters().open_failures >= 2; }));
-  EXPECT_EQ(source.device_counters().state, drivers::DeviceState::kLost);
+  EXPECT_EQ(source.device_counters().state, drivers::capture::DeviceState::kLost);
   EXPECT_EQ(source.device_counters().losses, 1u);
   std::this_thread::sleep_for(250ms);
   h = source.update_health(host_now());
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStale);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStale);
   EXPECT_NE(h.source.last_error.find("fake0"), std::string::npos) << h.source.last_error;
 
   // It comes back: reopened without restarting anything, and the stream continues.
@@ -136,7 +136,7 @@ TEST(ImuSourceThreads, CanSourceDecodesReconnectsAfterTheInterfaceVanishes) {
   send_samples(50, 30);
   ASSERT_TRUE(wait_for(poll, [&] { return samples.size() == 80; })) << samples.size();
   h = source.update_health(host_now());
-  EXPECT_EQ(h.source.streams.at(0).state, drivers::StreamState::kStreaming);
+  EXPECT_EQ(h.source.streams.at(0).state, drivers::capture::StreamState::kStreaming);
   EXPECT_EQ(h.source.streams.at(0).stale_events, 1u);
   EXPECT_EQ(h.source.streams.at(0).recoveries, 1u);
   EXPECT_EQ(h.source.reconnects, 1u);
@@ -144,7 +144,7 @@ TEST(ImuSourceThreads, CanSourceDecodesReconnectsAfterTheInterfaceVanishes) {
   EXPECT_EQ(h.decoder.sequence_gaps, 0u);
   EXPECT_GT(h.device.wakeups, 10u);
   source.stop();
-  EXPECT_EQ(source.device_counters().state, drivers::DeviceState::kStopped);
+  EXPECT_EQ(source.device_counters().state, drivers::capture::DeviceState::kStopped);
 }
 
 TEST(ImuSourceThreads, AFullRingDropsTheNewestFramesAndCountsThem) {
