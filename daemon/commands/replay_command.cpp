@@ -31,6 +31,7 @@ struct ReplayArgs {
   int threads = -1;
   double map_cell_m = 0.2;
   std::size_t map_max_points = 2'000'000;
+  std::string debug_images;
 };
 
 void print_result(const replay::ReplayResult& r) {
@@ -50,6 +51,15 @@ void print_result(const replay::ReplayResult& r) {
              static_cast<double>(s.peak_rss_bytes) / (1024.0 * 1024.0));
   if (s.degenerate_frames > 0) {
     fmt::print("degenerate frames: {} (see frames.csv)\n", s.degenerate_frames);
+  }
+  if (s.vio_ms.count > 0) {
+    fmt::print(
+        "visual update: {} of {} images updated the state; per image p50 {:.2f} ms, p99 {:.2f} ms "
+        "(pyramid {:.2f}, selection {:.2f}, update {:.2f}, map {:.2f} ms p50); {} patches p50; "
+        "visual map {} points\n",
+        s.counters.vio_updates, s.counters.images_in, s.vio_ms.p50, s.vio_ms.p99,
+        s.vio_pyramid_ms.p50, s.vio_selection_ms.p50, s.vio_update_ms.p50, s.vio_map_ms.p50,
+        s.vio_patches.p50, s.visual_map.points);
   }
   if (s.frames == 0) {
     fmt::print("no pose was estimated: IMU initialisation {}; scans in {}, before init {}\n",
@@ -75,6 +85,7 @@ int run(const ReplayArgs& args) {
   options.threads = args.threads;
   options.map_cell_m = args.map_cell_m;
   options.map_max_points = args.map_max_points;
+  options.debug_images_dir = args.debug_images;
   try {
     const replay::ReplayResult result = replay::run_replay(loaded.config, options);
     for (const auto& note : result.notes) fmt::print(stderr, "livod replay: note: {}\n", note);
@@ -107,6 +118,9 @@ void add_replay_command(CLI::App& app, CommandContext& ctx) {
                   "Estimator threads (default: the configuration's estimator.threads, 0 = one per "
                   "core); the trajectory is the same for any value")
       ->check(CLI::Range(0, 256));
+  cmd->add_option("--debug-images", args->debug_images,
+                  "Write every image of the visual update with its patches drawn to this folder "
+                  "(created; off by default)");
   cmd->add_option("--map-cell", args->map_cell_m, "map.pcd voxel filter cell (m)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

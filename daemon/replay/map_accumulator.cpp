@@ -1,6 +1,8 @@
 #include "daemon/replay/map_accumulator.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -54,6 +56,12 @@ bool MapAccumulator::add(const Eigen::Vector3d& p) {
   return true;
 }
 
+bool MapAccumulator::add(const Eigen::Vector3d& p_world, std::uint32_t rgb) {
+  if (!add(p_world)) return false;
+  rgb_.push_back(rgb);
+  return true;
+}
+
 void MapAccumulator::grow() {
   std::vector<std::uint64_t> old;
   old.swap(table_);
@@ -68,7 +76,8 @@ void MapAccumulator::grow() {
 }
 
 std::size_t MapAccumulator::bytes() const {
-  return xyz_.capacity() * sizeof(float) + table_.capacity() * sizeof(std::uint64_t);
+  return xyz_.capacity() * sizeof(float) + rgb_.capacity() * sizeof(std::uint32_t) +
+         table_.capacity() * sizeof(std::uint64_t);
 }
 
 void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
@@ -82,6 +91,24 @@ void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz)
   // runs on.
   out.write(reinterpret_cast<const char*>(xyz.data()),
             static_cast<std::streamsize>(n * 3 * sizeof(float)));
+  out.flush();
+  if (!out) throw Error("cannot write " + path.string());
+}
+
+void write_pcd_rgb(const std::filesystem::path& path, const std::vector<float>& xyz,
+                   const std::vector<std::uint32_t>& rgb) {
+  const std::size_t n = std::min(xyz.size() / 3, rgb.size());
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw Error("cannot create " + path.string());
+  out << "# .PCD v0.7 - Point Cloud Data file format\n"
+      << "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+      << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
+  std::vector<char> buffer(n * 16);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::memcpy(&buffer[i * 16], &xyz[3 * i], 12);
+    std::memcpy(&buffer[i * 16 + 12], &rgb[i], 4);
+  }
+  out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
   out.flush();
   if (!out) throw Error("cannot write " + path.string());
 }

@@ -10,12 +10,15 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
+#include "daemon/replay/debug_images.hpp"
+#include "daemon/replay/image_sources.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/map_accumulator.hpp"
 #include "daemon/replay/progress.hpp"
-#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/replay/sources.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
+#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/worker_pool.hpp"
 #include "estimator/pipeline.hpp"
 
@@ -47,12 +50,39 @@ struct ReplayedSensor {
   std::unique_ptr<runtime::SensorClockMapper> clock;
   bool scans_to_estimator = false;
   bool imu_to_estimator = false;
+  bool images_to_estimator = false;
   bool imu_usable =
       false;  // its IMU samples may feed the clock (an enabled internal IMU, or an IMU)
   drivers::DecoderSinks sinks;
   std::uint64_t scans = 0;
   std::uint64_t imu_samples = 0;
+  std::uint64_t images = 0;       // handed to the estimator
+  std::uint64_t images_seen = 0;  // delivered by the source (camera.decimation counts them)
 };
+
+// The per-image columns of the visual update (4 bytes each per image).
+struct VioSeries {
+  std::vector<float> total, pyramid, selection, update, map, patches;
+
+  void add(const estimator::vio::VioReport& v) {
+    total.push_back(static_cast<float>(v.timings.total_ms));
+    pyramid.push_back(static_cast<float>(v.timings.pyramid_ms));
+    selection.push_back(static_cast<float>(v.timings.selection_ms));
+    update.push_back(static_cast<float>(v.timings.update_ms));
+    map.push_back(static_cast<float>(v.timings.map_ms));
+    patches.push_back(static_cast<float>(v.patches));
+  }
+};
+
+// The estimator's camera: the first enabled camera, when the visual update is on.
+int estimator_camera(const LivodConfig& config) {
+  if (!config.estimator.vio.enabled) return -1;
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const auto& s = config.sensors[i];
+    if (s.enabled && sensor_kind(s.driver) == SensorKind::camera) return static_cast<int>(i);
+  }
+  return -1;
+}
 
 // The per-frame columns kept for the report's distributions (4 bytes each per frame).
 struct FrameSeries {
@@ -132,6 +162,9 @@ class Replay {
   std::unique_ptr<WorkerPool> pool_;  // before pipeline_: the pipeline uses it until destroyed
   std::unique_ptr<estimator::LioPipeline> pipeline_;
   Eigen::Isometry3d T_imu_lidar_ = Eigen::Isometry3d::Identity();
+  int camera_ = -1;  // index of the estimator's camera in the configuration, -1: none
+  VioSeries vio_series_;
+  double inv_exposure_ = 1.0;
   std::optional<TrajectoryWriter> trajectory_;
   std::optional<FrameTable> frames_;
   MapAccumulator map_;
@@ -161,6 +194,7 @@ void Replay::select_sensors() {
   if (lidar < 0) throw Error("the configuration has no enabled LiDAR: the estimator needs one");
   const auto body = static_cast<std::size_t>(config_.body_sensor_index);
   const auto lidar_index = static_cast<std::size_t>(lidar);
+  camera_ = estimator_camera(config_);
   T_imu_lidar_ = config_.sensors[lidar_index].T_body_sensor;
 
   const auto recordings = assign_recordings(config_, options_.inputs);
@@ -168,13 +202,16 @@ void Replay::select_sensors() {
     const SensorConfig& s = config_.sensors[i];
     const bool is_body = i == body;
     const bool is_lidar = i == lidar_index;
-    if (!is_body && !is_lidar) {
-      result_.notes.push_back(fmt::format("sensor '{}' ({}) is not replayed: {}", s.name,
-                                          enum_name(s.driver),
-                                          !s.enabled ? "disabled"
-                                          : sensor_kind(s.driver) == SensorKind::camera
-                                              ? "replay runs LiDAR-inertial odometry only"
-                                              : "the estimator takes the body IMU and one LiDAR"));
+    const bool is_camera = static_cast<int>(i) == camera_;
+    if (!is_body && !is_lidar && !is_camera) {
+      const bool camera = sensor_kind(s.driver) == SensorKind::camera;
+      result_.notes.push_back(
+          fmt::format("sensor '{}' ({}) is not replayed: {}", s.name, enum_name(s.driver),
+                      !s.enabled ? "disabled"
+                      : camera && !config_.estimator.vio.enabled
+                          ? "estimator.vio.enabled is false (LiDAR-inertial odometry only)"
+                      : camera ? "the visual update uses one camera, the first enabled one"
+                               : "the estimator takes the body IMU and one LiDAR"));
       continue;
     }
     const auto& recording = recordings[i];
@@ -188,8 +225,12 @@ void Replay::select_sensors() {
     if (!recording->replay.topic.empty()) r->file += " " + recording->replay.topic;
     r->scans_to_estimator = is_lidar;
     r->imu_to_estimator = is_body;
+    r->images_to_estimator = is_camera;
     r->imu_usable = sensor_kind(s.driver) == SensorKind::imu || s.imu.enabled;
-    r->role = is_lidar && is_body ? "lidar + body imu" : is_lidar ? "lidar" : "body imu";
+    r->role = is_camera             ? "camera"
+              : is_lidar && is_body ? "lidar + body imu"
+              : is_lidar            ? "lidar"
+                                    : "body imu";
     r->source = make_source(s, recording->replay, recording->ports);
     r->clock = std::make_unique<runtime::SensorClockMapper>(s);
     ReplayedSensor* self = r.get();
@@ -208,6 +249,17 @@ void Replay::select_sensors() {
       self->clock->map_scan(copy);
       ++self->scans;
       pipeline_->add_scan(std::move(copy));
+    };
+    r->sinks.on_image = [this, self](const ImageFrame& image) {
+      if (!self->images_to_estimator) return;
+      // camera.decimation keeps every n-th frame (FAST-LIVO2 hilti_en: 4).
+      const auto decimation =
+          static_cast<std::uint64_t>(std::max(1, self->config->camera.decimation));
+      if (self->images_seen++ % decimation != 0) return;
+      ImageFrame frame = image;  // shares the pixels: the source made them for this frame
+      self->clock->map_image(frame);
+      ++self->images;
+      pipeline_->add_image(std::move(frame));
     };
     sensors_.push_back(std::move(r));
   }
@@ -231,7 +283,25 @@ void Replay::on_output(const estimator::PipelineOutput& o) {
   const Eigen::Matrix3d R_world_lidar = o.x.R_world_imu * T_imu_lidar_.linear();
   const Eigen::Vector3d p_world_lidar =
       o.x.R_world_imu * T_imu_lidar_.translation() + o.x.p_world_imu;
-  for (const auto& p : pipeline_->last_scan_points()) map_.add(R_world_lidar * p + p_world_lidar);
+  const auto& points = pipeline_->last_scan_points();
+  if (camera_ < 0) {
+    for (const auto& p : points) map_.add(R_world_lidar * p + p_world_lidar);
+  } else {
+    // A camera's map holds the points its images saw, coloured (LIO-only frames add none).
+    const auto& rgb = pipeline_->last_scan_colors();
+    const auto& seen = pipeline_->last_scan_colored();
+    for (std::size_t i = 0; i < points.size() && i < rgb.size(); ++i) {
+      if (seen[i] != 0) map_.add(R_world_lidar * points[i] + p_world_lidar, rgb[i]);
+    }
+  }
+  if (o.report.kind == estimator::MeasurementGroup::Kind::image && o.report.vio.ran) {
+    vio_series_.add(o.report.vio);
+    inv_exposure_ = o.report.vio.inv_exposure;
+    if (!options_.debug_images_dir.empty() && pipeline_->vio() != nullptr) {
+      write_debug_image(options_.debug_images_dir, o.t, pipeline_->vio()->last_grey(),
+                        o.report.vio.debug, config_.estimator.vio.patch_size);
+    }
+  }
   pending_.push_back(PendingFrame{o.report, map_.size(), current_rss_bytes()});
   map_bytes_peak_ = std::max(map_bytes_peak_, o.report.map.bytes);
   last_frame_ms_ = o.report.timings.total_ms;
@@ -280,6 +350,14 @@ ReplayResult Replay::run() {
   const int threads = options_.threads >= 0 ? options_.threads : config_.estimator.threads;
   pool_ = std::make_unique<WorkerPool>(threads > 0 ? threads : WorkerPool::hardware_threads());
   po.runner = pool_.get();
+  if (camera_ >= 0) {
+    po.camera = vio_camera(config_.sensors[static_cast<std::size_t>(camera_)]);
+    po.colorize = true;
+    po.vio_debug = !options_.debug_images_dir.empty();
+    if (po.vio_debug) std::filesystem::create_directories(options_.debug_images_dir);
+  } else if (!options_.debug_images_dir.empty()) {
+    throw Error("--debug-images needs a camera and estimator.vio.enabled");
+  }
   pipeline_ = std::make_unique<estimator::LioPipeline>(po);
   open_outputs();
 
@@ -322,7 +400,11 @@ ReplayResult Replay::run() {
 
   trajectory_->close();
   frames_->close();
-  write_pcd(result_.map, map_.xyz());
+  if (camera_ >= 0) {
+    write_pcd_rgb(result_.map, map_.xyz(), map_.rgb());
+  } else {
+    write_pcd(result_.map, map_.xyz());
+  }
   result_.summary = summarise(wall_s);
   result_.summary.decode_s = decode_s;
   result_.summary.estimator_s = estimator_s;
@@ -361,6 +443,14 @@ ReplaySummary Replay::summarise(double wall_s) const {
   s.map_bytes_peak = std::max(map_bytes_peak_, s.map.bytes);
   s.exported_points = map_.size();
   s.exported_dropped = map_.dropped_full();
+  s.vio_ms = distribution(vio_series_.total);
+  s.vio_pyramid_ms = distribution(vio_series_.pyramid);
+  s.vio_selection_ms = distribution(vio_series_.selection);
+  s.vio_update_ms = distribution(vio_series_.update);
+  s.vio_map_ms = distribution(vio_series_.map);
+  s.vio_patches = distribution(vio_series_.patches);
+  if (pipeline_->vio() != nullptr) s.visual_map = pipeline_->vio()->map().stats();
+  s.inv_exposure = inv_exposure_;
   for (const auto& r : sensors_) {
     SensorSummary sensor;
     sensor.name = r->config->name;
@@ -369,6 +459,7 @@ ReplaySummary Replay::summarise(double wall_s) const {
     sensor.counters = r->source->summary();
     sensor.scans = r->scans;
     sensor.imu_samples = r->imu_samples;
+    sensor.images = r->images;
     sensor.clock = clock_summary(*r->clock);
     s.sensors.push_back(std::move(sensor));
   }

@@ -9,14 +9,18 @@
 //
 // The estimator takes the body IMU (body_frame) and one LiDAR: the body IMU's own LiDAR when the
 // body is an internal IMU ("<lidar>.imu"), else the first enabled LiDAR. T_imu_lidar is that
-// LiDAR's T_body_sensor (the body IMU defines the body frame). Other sensors are not replayed
-// (the result's notes say so). The LiDAR's internal IMU, when enabled, feeds its clock domain even
-// when it is not the body IMU.
+// LiDAR's T_body_sensor (the body IMU defines the body frame). With estimator.vio.enabled it also
+// takes the first enabled camera (image_sources.hpp: EuRoC/ASL or plain image folders, ROS1 bag
+// image topics), through that camera's clock domain, for the visual update; T_imu_cam is its
+// T_body_sensor. Other sensors are not replayed (the result's notes say so). The LiDAR's internal
+// IMU, when enabled, feeds its clock domain even when it is not the body IMU.
 //
 // Outputs in ReplayOptions::out_dir (created): trajectory.txt (TUM, mapped measurement time,
 // body frame in the estimator's world = the IMU frame at initialisation), map.pcd (binary PCD,
-// registered downsampled points through a bounded voxel filter), timing.txt, timing.json and
-// frames.csv (see timing_report.hpp).
+// registered downsampled points through a bounded voxel filter; with a camera x y z rgb, the
+// points seen in the images coloured from them, as FAST-LIVO2's coloured map), timing.txt,
+// timing.json and frames.csv (see timing_report.hpp); with debug_images_dir, one PNG per image
+// with its patches drawn (debug_images.hpp).
 
 #include <cstddef>
 #include <filesystem>
@@ -38,6 +42,9 @@ struct ReplayOptions {
   double max_duration_s = 0.0;
   // Estimator threads; < 0: the configuration's estimator.threads (0 there: one per core).
   int threads = -1;
+  // --debug-images: a folder (created) for the visual update's images with their patches drawn;
+  // empty: none.
+  std::filesystem::path debug_images_dir;
 };
 
 struct ReplayResult {

@@ -46,6 +46,7 @@ struct SensorSummary {
   std::string counters;  // the source's summary line
   std::uint64_t scans = 0;
   std::uint64_t imu_samples = 0;
+  std::uint64_t images = 0;  // frames handed to the estimator
   ClockSummary clock;
 };
 
@@ -76,6 +77,11 @@ struct ReplaySummary {
   std::size_t exported_points = 0;
   std::uint64_t exported_dropped = 0;  // points in new cells after the budget was spent
   std::vector<SensorSummary> sensors;
+  // The visual update, per image group (empty without a camera): its time and split, the
+  // patches it used, the visual map at the end and the inverse exposure of the last image.
+  Distribution vio_ms, vio_pyramid_ms, vio_selection_ms, vio_update_ms, vio_map_ms, vio_patches;
+  estimator::vio::VisualMapStats visual_map;
+  double inv_exposure = 1.0;
 };
 
 std::string format_timing_text(const ReplaySummary& s);

@@ -1,0 +1,430 @@
+#include "daemon/replay/image_sources.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/image.hpp"
+#include "io/euroc.hpp"
+#include "io/rosbag/bag_reader.hpp"
+
+namespace livod::daemon::replay {
+namespace {
+
+namespace rb = io::rosbag;
+
+// Frames that all fail from the start mean a wrong folder or topic, not a damaged frame.
+constexpr std::uint64_t kGiveUpAfter = 10;
+
+// 8-bit mono or BGR, whatever the recording stored.
+cv::Mat to_mono_or_bgr(const cv::Mat& in) {
+  cv::Mat m = in;
+  if (m.depth() == CV_16U) {
+    cv::Mat scaled;
+    m.convertTo(scaled, CV_8U, 1.0 / 256.0);
+    m = scaled;
+  } else if (m.depth() != CV_8U) {
+    throw Error("unsupported pixel depth (8 or 16 bits per channel)");
+  }
+  if (m.channels() == 4) {
+    cv::Mat bgr;
+    cv::cvtColor(m, bgr, cv::COLOR_BGRA2BGR);
+    m = bgr;
+  } else if (m.channels() != 1 && m.channels() != 3) {
+    throw Error("unsupported channel count " + std::to_string(m.channels()));
+  }
+  return m;
+}
+
+// A decimal number of seconds ("1403715273.262142", "12", "1.036400e-01") in ns, exact for plain
+// decimals (a double would round the nanoseconds of an epoch time).
+std::int64_t parse_seconds_ns(const std::string& text, const std::string& where) {
+  const bool plain = text.find_first_of("eE") == std::string::npos;
+  try {
+    if (!plain) return static_cast<std::int64_t>(std::llround(std::stod(text) * 1e9));
+    const bool negative = !text.empty() && text[0] == '-';
+    const std::string body = negative ? text.substr(1) : text;
+    const auto dot = body.find('.');
+    const std::string whole = body.substr(0, dot);
+    std::string frac = dot == std::string::npos ? "" : body.substr(dot + 1);
+    if (whole.empty() && frac.empty()) throw std::invalid_argument("empty");
+    for (const char c : whole + frac) {
+      if (std::isdigit(static_cast<unsigned char>(c)) == 0) throw std::invalid_argument("digit");
+    }
+    frac = (frac + "000000000").substr(0, 9);
+    const std::int64_t ns =
+        (whole.empty() ? 0 : std::stoll(whole)) * 1'000'000'000LL + std::stoll(frac);
+    return negative ? -ns : ns;
+  } catch (const std::exception&) {
+    throw Error(where + ": '" + text + "' is not a time in seconds");
+  }
+}
+
+struct FolderFrame {
+  std::int64_t time_ns = 0;
+  std::filesystem::path path;
+  std::optional<Nanoseconds> exposure;
+};
+
+bool is_image_file(const std::filesystem::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm" ||
+         ext == ".bmp" || ext == ".tif" || ext == ".tiff";
+}
+
+std::vector<FolderFrame> read_timestamps_txt(const std::filesystem::path& folder) {
+  const auto file = folder / "timestamps.txt";
+  std::ifstream in(file);
+  if (!in) throw Error("cannot read " + file.string());
+  std::vector<FolderFrame> frames;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    std::istringstream fields(line);
+    std::string time;
+    std::string name;
+    if (!(fields >> time)) continue;  // blank or comment
+    const std::string where = file.string() + ":" + std::to_string(number);
+    if (!(fields >> name)) throw Error(where + ": expected '<time> <file>'");
+    // Seconds with a decimal point or an exponent; a bare integer is nanoseconds (EuRoC style).
+    const bool seconds = time.find_first_of(".eE") != std::string::npos;
+    std::int64_t ns = 0;
+    if (seconds) {
+      ns = parse_seconds_ns(time, where);
+    } else {
+      try {
+        std::size_t used = 0;
+        ns = std::stoll(time, &used);
+        if (used != time.size()) throw std::invalid_argument("trailing");
+      } catch (const std::exception&) {
+        throw Error(where + ": '" + time + "' is neither seconds nor integer nanoseconds");
+      }
+    }
+    frames.push_back({ns, folder / name, std::nullopt});
+  }
+  return frames;
+}
+
+std::vector<FolderFrame> read_times_txt(const std::filesystem::path& folder) {
+  const auto file = folder / "times.txt";
+  std::vector<std::filesystem::path> images;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    if (entry.is_regular_file() && is_image_file(entry.path())) images.push_back(entry.path());
+  }
+  std::sort(images.begin(), images.end());
+  std::ifstream in(file);
+  if (!in) throw Error("cannot read " + file.string());
+  std::vector<FolderFrame> frames;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    std::istringstream fields(line);
+    std::string time;
+    if (!(fields >> time) || time[0] == '#') continue;
+    frames.push_back(
+        {parse_seconds_ns(time, file.string() + ":" + std::to_string(number)), {}, std::nullopt});
+  }
+  if (frames.size() != images.size()) {
+    throw Error(fmt::format("{}: {} times for {} images in {}", file.string(), frames.size(),
+                            images.size(), folder.string()));
+  }
+  for (std::size_t i = 0; i < frames.size(); ++i) frames[i].path = images[i];
+  return frames;
+}
+
+std::vector<FolderFrame> read_folder(const std::filesystem::path& folder) {
+  if (!std::filesystem::is_directory(folder)) throw Error(folder.string() + " is not a folder");
+  std::vector<FolderFrame> frames;
+  if (std::filesystem::exists(folder / "data.csv")) {
+    for (const auto& r : io::read_euroc_camera_csv(folder / "data.csv")) {
+      frames.push_back({r.timestamp.ns, r.path, r.exposure});
+    }
+    return frames;  // the reader checked that the times increase
+  }
+  if (std::filesystem::exists(folder / "timestamps.txt")) {
+    frames = read_timestamps_txt(folder);
+  } else if (std::filesystem::exists(folder / "times.txt")) {
+    frames = read_times_txt(folder);
+  } else {
+    throw Error(folder.string() +
+                ": neither an EuRoC camera folder (data.csv) nor an image folder with "
+                "timestamps.txt or times.txt");
+  }
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    if (frames[i].time_ns <= frames[i - 1].time_ns) {
+      throw Error(folder.string() + ": frame times must increase (" + frames[i].path.string() +
+                  ")");
+    }
+  }
+  return frames;
+}
+
+// Counts frames that cannot be used and gives up when the first ones all fail.
+class FrameErrors {
+ public:
+  explicit FrameErrors(std::string where) : where_(std::move(where)) {}
+  void ok() { ++ok_; }
+  void failed(const std::exception& e) {
+    if (count_++ == 0) first_ = e.what();
+    if (ok_ == 0 && count_ >= kGiveUpAfter) {
+      throw Error(where_ + ": the first " + std::to_string(count_) +
+                  " frames cannot be read: " + first_);
+    }
+  }
+  [[nodiscard]] std::uint64_t count() const { return count_; }
+  [[nodiscard]] std::uint64_t good() const { return ok_; }
+
+ private:
+  std::string where_;
+  std::string first_;
+  std::uint64_t count_ = 0;
+  std::uint64_t ok_ = 0;
+};
+
+class ImageFolderSource final : public ReplaySource {
+ public:
+  ImageFolderSource(const std::filesystem::path& folder, std::string sensor)
+      : frames_(read_folder(folder)),
+        errors_("sensor '" + sensor + "' (" + folder.string() + ")") {}
+
+  std::optional<std::int64_t> peek_time() override {
+    if (next_ >= frames_.size()) return std::nullopt;
+    return frames_[next_].time_ns;
+  }
+
+  void deliver(const drivers::DecoderSinks& sinks) override {
+    const FolderFrame& f = frames_[next_++];
+    ImageFrame frame;
+    try {
+      const cv::Mat raw = cv::imread(f.path.string(), cv::IMREAD_UNCHANGED);
+      if (raw.empty()) throw Error("cannot read or decode " + f.path.string());
+      frame.image = to_mono_or_bgr(raw);
+    } catch (const std::exception& e) {
+      errors_.failed(e);
+      return;
+    }
+    errors_.ok();
+    frame.stamp.sensor = SensorTime(f.time_ns);
+    frame.stamp.host = HostTime(f.time_ns);
+    frame.exposure = f.exposure.value_or(Nanoseconds(0));
+    frame.sequence = static_cast<std::uint32_t>(next_ - 1);
+    frame.stamp_marks = ImageStampMarks::mid_exposure;
+    if (sinks.on_image) sinks.on_image(frame);
+  }
+
+  void finish(const drivers::DecoderSinks& /*sinks*/) override {}
+
+  [[nodiscard]] std::string summary() const override {
+    return fmt::format("frames {} of {}, unreadable {}", errors_.good(), frames_.size(),
+                       errors_.count());
+  }
+  [[nodiscard]] std::optional<double> fraction_done() const override {
+    return frames_.empty() ? std::nullopt
+                           : std::optional<double>(static_cast<double>(next_) /
+                                                   static_cast<double>(frames_.size()));
+  }
+
+ private:
+  std::vector<FolderFrame> frames_;
+  std::size_t next_ = 0;
+  FrameErrors errors_;
+};
+
+// Raw sensor_msgs/Image bytes as a cv::Mat (copied: the bag's buffer is reused).
+cv::Mat image_from_message(const rb::sensor_msgs::Image& m) {
+  const std::string& e = m.encoding;
+  int type = 0;
+  int bayer = -1;
+  int rgb_order = -1;
+  if (e == "mono8" || e == "8UC1") {
+    type = CV_8UC1;
+  } else if (e == "mono16" || e == "16UC1") {
+    type = CV_16UC1;
+  } else if (e == "bgr8" || e == "8UC3") {
+    type = CV_8UC3;
+  } else if (e == "rgb8") {
+    type = CV_8UC3;
+    rgb_order = cv::COLOR_RGB2BGR;
+  } else if (e == "bgra8" || e == "8UC4") {
+    type = CV_8UC4;
+  } else if (e == "rgba8") {
+    type = CV_8UC4;
+    rgb_order = cv::COLOR_RGBA2BGR;
+  } else if (e == "bayer_rggb8") {
+    // OpenCV names Bayer patterns by the second row's first two pixels.
+    type = CV_8UC1;
+    bayer = cv::COLOR_BayerBG2BGR;
+  } else if (e == "bayer_bggr8") {
+    type = CV_8UC1;
+    bayer = cv::COLOR_BayerRG2BGR;
+  } else if (e == "bayer_gbrg8") {
+    type = CV_8UC1;
+    bayer = cv::COLOR_BayerGR2BGR;
+  } else if (e == "bayer_grbg8") {
+    type = CV_8UC1;
+    bayer = cv::COLOR_BayerGB2BGR;
+  } else {
+    throw Error("unsupported image encoding '" + e + "'");
+  }
+  const int w = static_cast<int>(m.width);
+  const int h = static_cast<int>(m.height);
+  const std::size_t row = static_cast<std::size_t>(w) * CV_ELEM_SIZE(type);
+  if (w <= 0 || h <= 0 || m.step < row ||
+      m.data.size() < static_cast<std::size_t>(m.step) * static_cast<std::size_t>(h - 1) + row) {
+    throw Error(fmt::format("image {}x{} {} with step {} and {} bytes is inconsistent", w, h, e,
+                            m.step, m.data.size()));
+  }
+  if (m.is_bigendian != 0 && CV_MAT_DEPTH(type) == CV_16U) {
+    throw Error("big-endian 16-bit images are not supported");
+  }
+  const cv::Mat view(h, w, type, const_cast<std::uint8_t*>(m.data.data()), m.step);
+  cv::Mat out;
+  if (bayer >= 0) {
+    cv::cvtColor(view, out, bayer);
+  } else if (rgb_order >= 0) {
+    cv::cvtColor(view, out, rgb_order);
+  } else {
+    out = view.clone();
+  }
+  return to_mono_or_bgr(out);
+}
+
+class BagImageSource final : public ReplaySource {
+ public:
+  BagImageSource(const std::filesystem::path& file, const std::string& topic, std::string sensor)
+      : bag_(file), errors_("sensor '" + sensor + "' (" + file.string() + " " + topic + ")") {
+    for (const auto& c : bag_.connections()) {
+      if (c.topic == topic) {
+        type_ = c.type;
+        break;
+      }
+    }
+    if (type_.empty()) {
+      std::string topics;
+      for (const auto& t : bag_.topics()) topics += (topics.empty() ? "" : ", ") + t.topic;
+      throw Error(bag_.source() + ": no topic '" + topic + "' (topics: " + topics + ")");
+    }
+    compressed_ = type_ == rb::MessageTraits<rb::sensor_msgs::CompressedImage>::type;
+    if (!compressed_ && type_ != rb::MessageTraits<rb::sensor_msgs::Image>::type) {
+      throw Error("topic " + topic + " is " + type_ +
+                  ", not sensor_msgs/Image or sensor_msgs/CompressedImage");
+    }
+    start_ns_ = bag_.start_time_ns().value_or(0);
+    end_ns_ = bag_.end_time_ns().value_or(0);
+    rb::BagQuery query;
+    query.topics = {topic};
+    cursor_.emplace(bag_.read(query));
+  }
+
+  std::optional<std::int64_t> peek_time() override {
+    if (!pending_ && !ended_) {
+      pending_ = cursor_->next();
+      ended_ = !pending_;
+    }
+    if (!pending_) return std::nullopt;
+    return pending_->time_ns;
+  }
+
+  void deliver(const drivers::DecoderSinks& sinks) override {
+    peek_time();
+    if (!pending_) return;
+    const rb::BagMessage m = *pending_;
+    pending_.reset();
+    last_ns_ = m.time_ns;
+    ImageFrame frame;
+    try {
+      if (compressed_) {
+        m.decode_into(compressed_msg_);
+        const cv::Mat bytes(1, static_cast<int>(compressed_msg_.data.size()), CV_8UC1,
+                            compressed_msg_.data.data());
+        const cv::Mat raw = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+        if (raw.empty()) throw Error("cannot decode the " + compressed_msg_.format + " image");
+        frame.image = to_mono_or_bgr(raw);
+        frame.stamp.sensor = SensorTime(compressed_msg_.header.stamp.to_ns());
+      } else {
+        m.decode_into(image_msg_);
+        frame.image = image_from_message(image_msg_);
+        frame.stamp.sensor = SensorTime(image_msg_.header.stamp.to_ns());
+      }
+    } catch (const std::exception& e) {
+      errors_.failed(e);
+      return;
+    }
+    errors_.ok();
+    frame.stamp.host = HostTime(m.time_ns);
+    frame.sequence = static_cast<std::uint32_t>(errors_.good() - 1);
+    frame.stamp_marks = ImageStampMarks::mid_exposure;
+    if (sinks.on_image) sinks.on_image(frame);
+  }
+
+  void finish(const drivers::DecoderSinks& /*sinks*/) override {}
+
+  [[nodiscard]] std::string summary() const override {
+    return fmt::format("{} frames {}, undecodable {}", compressed_ ? "compressed" : "raw",
+                       errors_.good(), errors_.count());
+  }
+  [[nodiscard]] std::optional<double> fraction_done() const override {
+    if (end_ns_ <= start_ns_) return std::nullopt;
+    return static_cast<double>(last_ns_ - start_ns_) / static_cast<double>(end_ns_ - start_ns_);
+  }
+
+ private:
+  rb::BagReader bag_;
+  std::string type_;
+  bool compressed_ = false;
+  std::optional<rb::MessageCursor> cursor_;
+  std::optional<rb::BagMessage> pending_;
+  bool ended_ = false;
+  std::int64_t start_ns_ = 0;
+  std::int64_t end_ns_ = 0;
+  std::int64_t last_ns_ = 0;
+  rb::sensor_msgs::Image image_msg_;
+  rb::sensor_msgs::CompressedImage compressed_msg_;
+  FrameErrors errors_;
+};
+
+}  // namespace
+
+std::unique_ptr<ReplaySource> make_image_folder_source(const std::filesystem::path& folder,
+                                                       const SensorConfig& sensor) {
+  return std::make_unique<ImageFolderSource>(folder, sensor.name);
+}
+
+std::unique_ptr<ReplaySource> make_bag_image_source(const std::filesystem::path& file,
+                                                    const std::string& topic,
+                                                    const SensorConfig& sensor) {
+  return std::make_unique<BagImageSource>(file, topic, sensor.name);
+}
+
+estimator::vio::VioCamera vio_camera(const SensorConfig& sensor) {
+  const CameraConfig& c = sensor.camera;
+  estimator::vio::VioCamera cam;
+  auto& k = cam.intrinsics;
+  k.model = c.model == CameraModel::equidistant ? CameraIntrinsics::Model::kEquidistant
+                                                : CameraIntrinsics::Model::kPinholeRadtan;
+  k.width = c.width;
+  k.height = c.height;
+  k.fx = c.intrinsics[0];
+  k.fy = c.intrinsics[1];
+  k.cx = c.intrinsics[2];
+  k.cy = c.intrinsics[3];
+  for (std::size_t i = 0; i < 4 && i < c.distortion.size(); ++i) k.distortion[i] = c.distortion[i];
+  if (c.distortion.size() == 5) k.radtan_k3 = c.distortion[4];
+  cam.scale = c.scale;
+  cam.T_imu_cam = sensor.T_body_sensor;
+  return cam;
+}
+
+}  // namespace livod::daemon::replay
