@@ -105,7 +105,8 @@ struct VioParams {
   double observation_pixels = 40.0;
   double visual_voxel_size = 0.5;      // visual map voxel edge (m), hard-coded upstream
   double depth_discontinuity_m = 0.5;  // reject points near a LiDAR depth jump
-  // LIO runs alone, at LiDAR rate, when no image arrives within this time after a scan.
+  // LIO runs alone, at LiDAR rate, for a scan when no image arrives within this time (and within
+  // a scan period) after its end: the longest LIO waits for a camera (sync/measurement_sync.hpp).
   double image_timeout_s = 0.15;
   // A level stops iterating when one step moves the state less than this (hard-coded upstream).
   ConvergenceParams convergence{0.001, 0.00001};

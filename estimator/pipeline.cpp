@@ -42,7 +42,7 @@ LioPipeline::LioPipeline(PipelineOptions options)
                                         options_.params.lio.incidence_term);
   if (options_.camera && options_.params.vio.enabled) {
     vio_ = std::make_unique<vio::VioProcessor>(options_.params.vio, options_.params.map,
-                                               *options_.camera);
+                                               *options_.camera, options_.runner);
     sync_.enable_images(true);
   }
 }

@@ -175,33 +175,34 @@ bool MeasurementSync::next(MeasurementGroup& group) {
     images_.pop_front();
     ++counters_.images_late;
   }
-  // An image whose points have all arrived (the newest scan reaches past it) and whose IMU too.
-  if (!images_.empty()) {
-    const MappedTime t_img = images_.front().mid_exposure;
-    if (!scans_.empty() && scans_.back().end >= t_img && imu_reach >= t_img) {
-      group.kind = MeasurementGroup::Kind::image;
-      group.t_update = t_img;
-      take_points_until(t_img, group.scan);
-      take_imu_until(t_img, group);
-      group.image = std::move(images_.front());
-      images_.pop_front();
-      last_update_ = t_img;
-      ++counters_.groups;
-      ++counters_.image_groups;
-      return true;
+  // A lidar group at the front scan's end (the next scan's when the front is the rest of a cut)
+  // when no image is due for it: an image is due when it comes within the timeout and before the
+  // next scan would end (a scan period later); it then takes these points.
+  if (!scans_.empty()) {
+    const std::size_t index = scans_.front().cut ? 1 : 0;
+    if (index < scans_.size() && imu_reach >= scans_[index].end) {
+      const MappedTime t_scan = scans_[index].end;
+      const Nanoseconds period = scans_[index].end - scans_[index].begin;
+      const MappedTime due = t_scan + std::min(from_seconds(params_.image_timeout_s), period);
+      const bool image_due =
+          images_.empty() ? imu_reach < due : images_.front().mid_exposure <= due;
+      if (!image_due) return next_lidar(group, index);
     }
   }
-  // A lidar group at the front scan's end (the next scan's when the front is the rest of a cut),
-  // unless an image is due by then.
-  if (scans_.empty()) return false;
-  const std::size_t index = scans_.front().cut ? 1 : 0;
-  if (index >= scans_.size()) return false;
-  const MappedTime t_scan = scans_[index].end;
-  if (imu_reach < t_scan) return false;
-  const MappedTime due = t_scan + from_seconds(params_.image_timeout_s);
-  const bool image_due = images_.empty() ? imu_reach < due : images_.front().mid_exposure <= due;
-  if (image_due) return false;
-  return next_lidar(group, index);
+  // An image whose points have all arrived (the newest scan reaches past it) and whose IMU too.
+  if (images_.empty() || scans_.empty()) return false;
+  const MappedTime t_img = images_.front().mid_exposure;
+  if (scans_.back().end < t_img || imu_reach < t_img) return false;
+  group.kind = MeasurementGroup::Kind::image;
+  group.t_update = t_img;
+  take_points_until(t_img, group.scan);
+  take_imu_until(t_img, group);
+  group.image = std::move(images_.front());
+  images_.pop_front();
+  last_update_ = t_img;
+  ++counters_.groups;
+  ++counters_.image_groups;
+  return true;
 }
 
 }  // namespace livod::estimator

@@ -14,11 +14,13 @@
 //    then the VIO update at that one instant.
 //
 // With images enabled (enable_images), image groups are made whenever the points up to the image
-// time have arrived; a scan end becomes a lidar group only when no image is due: the next queued
-// image is later than the scan end + image_timeout, or none is queued and the data (the IMU)
-// already reaches image_timeout past the scan end. LIO therefore never waits more than
-// image_timeout of data time for a camera: when images stop, odometry goes on at LiDAR rate,
-// and it returns to image times when they come back (FAST-LIVO2 stops: defect 1).
+// time have arrived; a scan end becomes a lidar group only when no image is due for it. An image
+// is due when it comes within image_timeout of the scan end and before the next scan would end
+// (one scan period, the scan's own span, later): then its group takes the scan's points. With no
+// image queued, the scan end waits until the data (the IMU) reaches that horizon. LIO therefore
+// never waits more than min(image_timeout, a scan period) of data time for a camera: when images
+// stop, odometry goes on at LiDAR rate, and it returns to image times when they come back
+// (FAST-LIVO2 stops: defect 1).
 //
 // Inputs carry mapped times: every per-sensor offset has been applied once, by the sensor's clock
 // domain, before anything reaches this class. Out-of-order input is dropped and counted; queues

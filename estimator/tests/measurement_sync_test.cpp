@@ -168,10 +168,11 @@ ImageFrame image_at(std::int64_t t_ns) {
 }
 
 // Feeds `until_ms` of a rig: 200 Hz IMU, 10 Hz scans delivered at their end, and images whose
-// mid-exposure times `image_ms` says (delivered 20 ms later, a camera's latency). Returns the
-// groups in order.
+// mid-exposure times `image_ms` says, delivered `latency_ms` later (a camera's latency); groups are
+// taken every `poll_ms`. Returns the groups in order.
 std::vector<MeasurementGroup> run_rig(MeasurementSync& sync, std::int64_t until_ms,
-                                      const std::vector<std::int64_t>& image_ms) {
+                                      const std::vector<std::int64_t>& image_ms,
+                                      std::int64_t latency_ms = 20, std::int64_t poll_ms = 1) {
   std::vector<MeasurementGroup> groups;
   MeasurementGroup g;
   std::uint32_t seq = 0;
@@ -179,10 +180,12 @@ std::vector<MeasurementGroup> run_rig(MeasurementSync& sync, std::int64_t until_
   for (std::int64_t t = 1; t <= until_ms; ++t) {
     if (t % 5 == 0) sync.add_imu(imu_at(t * kMs));
     if (t % 100 == 0) sync.add_scan(dense_scan((t - 100) * kMs, seq++));
-    while (next_image < image_ms.size() && image_ms[next_image] + 20 <= t) {
+    while (next_image < image_ms.size() && image_ms[next_image] + latency_ms <= t) {
       sync.add_image(image_at(image_ms[next_image++] * kMs));
     }
-    while (sync.next(g)) groups.push_back(g);
+    if (t % poll_ms == 0) {
+      while (sync.next(g)) groups.push_back(g);
+    }
   }
   return groups;
 }
@@ -254,14 +257,31 @@ TEST(MeasurementSync, LidarGoesOnWhenImagesStopAndImagesResume) {
         .push_back(g.t_update.ns / kMs);
   }
   // During the gap every scan end is an update (LiDAR rate): 499 (with the rest of the scan cut
-  // at 350 ms), 599, ... 1399; 1499 waits for the 1550 ms image, due within the timeout, which
-  // takes its points. The rest after 1950 ms waits for the next scan.
-  EXPECT_EQ(lidar_ends,
-            (std::vector<std::int64_t>{499, 599, 699, 799, 899, 999, 1099, 1199, 1299, 1399}));
+  // at 350 ms), 599, ... 1399; 1499 waits for the 1550 ms image, due before the next scan ends,
+  // which takes its points. After the last image (1950 ms) the rest of its scan joins the next
+  // one: 2099, once the IMU is a scan period past it without an image.
+  EXPECT_EQ(lidar_ends, (std::vector<std::int64_t>{499, 599, 699, 799, 899, 999, 1099, 1199, 1299,
+                                                   1399, 2099}));
   EXPECT_EQ(image_times,
             (std::vector<std::int64_t>{50, 150, 250, 350, 1550, 1650, 1750, 1850, 1950}));
-  expect_points_partitioned(groups, 1950 * kMs);
+  expect_points_partitioned(groups, 2099 * kMs);
   EXPECT_EQ(groups[4].scan.size(), 149U);  // 351 .. 499 ms
+}
+
+TEST(MeasurementSync, AScanEndIsNotSwallowedByALaterImageArrivingWithTheNextScan) {
+  // Groups taken every 100 ms. When the camera returns, its first image (1599) comes with the scan
+  // after the one ending at 1499: that image is more than a scan period after 1499, so 1499 keeps
+  // its own LIO update even though the image is already queued when its turn comes (taking the
+  // image first would merge the two scans).
+  MeasurementSync sync(SyncParams{.image_timeout_s = 0.15});
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  const auto groups = run_rig(sync, 2000, {50, 150, 1599, 1699}, 1, 100);
+  std::vector<std::int64_t> times;
+  for (const auto& g : groups) times.push_back(g.t_update.ns / kMs);
+  EXPECT_EQ(times, (std::vector<std::int64_t>{50, 150, 299, 399, 499, 599, 699, 799, 899, 999, 1099,
+                                              1199, 1299, 1399, 1499, 1599, 1699, 1799, 1899}));
+  expect_points_partitioned(groups, 1899 * kMs);
 }
 
 TEST(MeasurementSync, ASlowCameraLeavesScanEndsToLio) {
@@ -274,9 +294,9 @@ TEST(MeasurementSync, ASlowCameraLeavesScanEndsToLio) {
   for (const auto& g : groups) times.push_back(g.t_update.ns / kMs);
   // Scan ends more than the timeout before the next image are LIO updates at LiDAR rate; the
   // rest of a cut scan joins the next one.
-  EXPECT_EQ(times,
-            (std::vector<std::int64_t>{150, 299, 399, 550, 699, 799, 950, 1099, 1199, 1350, 1499}));
-  expect_points_partitioned(groups, 1499 * kMs);
+  EXPECT_EQ(times, (std::vector<std::int64_t>{150, 299, 399, 550, 699, 799, 950, 1099, 1199, 1350,
+                                              1499, 1599}));
+  expect_points_partitioned(groups, 1599 * kMs);
 }
 
 TEST(MeasurementSync, LateAndDisabledImages) {

@@ -103,7 +103,7 @@ TEST(VioWarp, WarpedReferencePatchesMatchTheSecondView) {
       obs.pixel = *px_ref;
       const Eigen::Vector3d p_ref = T_w_ref.inverse() * p;
       const Eigen::Vector3d n_ref = T_w_ref.linear().transpose() * scene.normal;
-      const auto A = affine_warp(camera, T_cur_ref, *px_ref, p_ref, n_ref, 4.0);
+      const auto A = affine_warp(camera, T_cur_ref, p_ref, n_ref);
       ASSERT_TRUE(A);
       const Eigen::Matrix2d A_ref_cur = A->inverse();
       for (int l = 0; l < kLevels; ++l) {
@@ -143,13 +143,43 @@ TEST(VioWarp, WarpedReferencePatchesMatchTheSecondView) {
   EXPECT_GT(plain_rms, 4.0 * warped_rms);
 }
 
+TEST(VioWarp, AffineWarpIsTheDerivativeOfThePlaneHomography) {
+  // Through the camera model, as finite differences: pixels around the reference pixel are
+  // unprojected, intersected with the plane, moved and projected into the current camera.
+  const CameraModel camera(camera_intrinsics());
+  Eigen::Isometry3d T_cur_ref = Eigen::Isometry3d::Identity();
+  T_cur_ref.linear() = so3::exp(Eigen::Vector3d(0.1, -0.3, 0.5));
+  T_cur_ref.translation() = Eigen::Vector3d(-0.4, 0.2, -0.7);
+  const Eigen::Vector3d n_ref = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
+  int checked = 0;
+  for (const double x : {-1.2, -0.4, 0.3, 1.1}) {
+    for (const double y : {-0.9, 0.1, 0.8}) {
+      const Eigen::Vector3d p_ref(x, y, 3.0);
+      const auto px_ref = camera.project(p_ref);
+      const auto A = affine_warp(camera, T_cur_ref, p_ref, n_ref);
+      ASSERT_TRUE(px_ref && A);
+      auto through_plane = [&](const Eigen::Vector2d& d) {
+        const Eigen::Vector3d ray = *camera.unproject(*px_ref + d);
+        return *camera.project(T_cur_ref * ((n_ref.dot(p_ref) / n_ref.dot(ray)) * ray));
+      };
+      const double h = 1e-3;
+      Eigen::Matrix2d A_fd;
+      A_fd.col(0) = (through_plane({h, 0}) - through_plane({-h, 0})) / (2 * h);
+      A_fd.col(1) = (through_plane({0, h}) - through_plane({0, -h})) / (2 * h);
+      EXPECT_LT((*A - A_fd).norm(), 1e-5 * A_fd.norm()) << "point " << p_ref.transpose();
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 12);
+}
+
 TEST(VioWarp, IdentityMotionGivesTheIdentityWarp) {
   const CameraModel camera(camera_intrinsics());
   const Eigen::Vector3d p(0.3, -0.2, 2.5);
   const auto px = camera.project(p);
   ASSERT_TRUE(px);
-  const auto A = affine_warp(camera, Eigen::Isometry3d::Identity(), *px, p,
-                             Eigen::Vector3d(0.1, 0.2, -1.0).normalized(), 4.0);
+  const auto A = affine_warp(camera, Eigen::Isometry3d::Identity(), p,
+                             Eigen::Vector3d(0.1, 0.2, -1.0).normalized());
   ASSERT_TRUE(A);
   EXPECT_LT((*A - Eigen::Matrix2d::Identity()).norm(), 1e-6);
   EXPECT_EQ(reference_level_offset(Eigen::Matrix2d::Identity()), 0);

@@ -39,16 +39,28 @@ bool warp_reference_patch(const PatchObservation& ref, const Eigen::Matrix2d& A_
   const Eigen::Matrix2d M = A_ref_cur * std::ldexp(1.0, level - k);
   const Eigen::Vector2d base = ref.block_pos[static_cast<std::size_t>(k)].cast<double>();
   const std::uint8_t* block = ref.block(k, S);
-  const auto limit = static_cast<double>(S - 1);
+  // The warped patch is the affine image of a square: inside the block when its four corners are.
   const double c = 0.5 * static_cast<double>(P - 1);
+  const auto limit = static_cast<double>(S - 1);
+  for (const double cx : {-c, c}) {
+    for (const double cy : {-c, c}) {
+      const Eigen::Vector2d corner = base + M * Eigen::Vector2d(cx, cy);
+      if (!(corner.x() >= 0.0 && corner.y() >= 0.0 && corner.x() < limit && corner.y() < limit)) {
+        return false;
+      }
+    }
+  }
   const auto tau = ref.inv_exposure;
-  for (int j = 0; j < P; ++j) {
-    for (int i = 0; i < P; ++i) {
-      const Eigen::Vector2d pos =
-          base + M * Eigen::Vector2d(static_cast<double>(i) - c, static_cast<double>(j) - c);
-      if (!(pos.x() >= 0.0 && pos.y() >= 0.0 && pos.x() < limit && pos.y() < limit)) return false;
-      out[j * P + i] =
-          tau * sample_block(block, S, static_cast<float>(pos.x()), static_cast<float>(pos.y()));
+  const Eigen::Vector2f step_x = M.col(0).cast<float>();
+  const Eigen::Vector2f step_y = M.col(1).cast<float>();
+  Eigen::Vector2f row = (base + M * Eigen::Vector2d(-c, -c)).cast<float>();
+  for (int j = 0; j < P; ++j, row += step_y) {
+    Eigen::Vector2f pos = row;
+    for (int i = 0; i < P; ++i, pos += step_x) {
+      // Float steps can drift a hair past a corner that lies exactly on the limit.
+      const float x = std::clamp(pos.x(), 0.0F, static_cast<float>(limit) - 1e-4F);
+      const float y = std::clamp(pos.y(), 0.0F, static_cast<float>(limit) - 1e-4F);
+      out[j * P + i] = tau * sample_block(block, S, x, y);
     }
   }
   return true;

@@ -7,6 +7,8 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include <time.h>
+
 #include "core/so3.hpp"
 #include "estimator/vio/photometric.hpp"
 #include "estimator/vio/reference_patch.hpp"
@@ -19,6 +21,12 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double thread_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
 }
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -36,31 +44,12 @@ int lowest_level(std::uint32_t mask) {
   return -1;
 }
 
-// Zero-mean normalised cross-correlation of two P x P patches taken from the centre of blocks.
-double ncc(const std::uint8_t* a, const std::uint8_t* b, int edge, int P) {
-  const int start = (edge - P) / 2;
-  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-  for (int y = start; y < start + P; ++y) {
-    for (int x = start; x < start + P; ++x) {
-      const double va = a[y * edge + x];
-      const double vb = b[y * edge + x];
-      sa += va;
-      sb += vb;
-      saa += va * va;
-      sbb += vb * vb;
-      sab += va * vb;
-    }
-  }
-  const double n = static_cast<double>(P * P);
-  const double cov = sab - sa * sb / n;
-  const double var = (saa - sa * sa / n) * (sbb - sb * sb / n);
-  return var > 1e-9 ? cov / std::sqrt(var) : 0.0;
-}
-
 }  // namespace
 
-VioProcessor::VioProcessor(const VioParams& params, const MapParams& map, const VioCamera& camera)
+VioProcessor::VioProcessor(const VioParams& params, const MapParams& map, const VioCamera& camera,
+                           TaskRunner* runner)
     : params_(params),
+      runner_(runner),
       full_(camera.intrinsics),
       camera_(camera.scale == 1.0 ? camera.intrinsics : camera.intrinsics.scaled(camera.scale)),
       extrinsic_(CameraExtrinsic::from(camera.T_imu_cam)),
@@ -74,6 +63,21 @@ VioProcessor::VioProcessor(const VioParams& params, const MapParams& map, const 
   depth_cols_ = (k.width + kDepthCell - 1) / kDepthCell;
   depth_rows_ = (k.height + kDepthCell - 1) / kDepthCell;
   depth_.assign(static_cast<std::size_t>(depth_cols_ * depth_rows_), kInf);
+  // The widest ray of the image (its border pixels), for a cheap cone test before projecting.
+  double min_z = 1.0;
+  for (int x = 0; x < k.width; x += 8) {
+    for (const int y : {0, k.height - 1}) {
+      if (const auto r = camera_.unproject({x, y})) min_z = std::min(min_z, r->z());
+    }
+  }
+  for (int y = 0; y < k.height; y += 8) {
+    for (const int x : {0, k.width - 1}) {
+      if (const auto r = camera_.unproject({x, y})) min_z = std::min(min_z, r->z());
+    }
+  }
+  // A margin of 2 deg; a lens seeing 90 deg or more off axis gets no cone test.
+  const double angle = std::acos(std::clamp(min_z, -1.0, 1.0)) + 2.0 * M_PI / 180.0;
+  cos_half_fov_ = angle < M_PI / 2 ? std::cos(angle) : -1.0;
 }
 
 bool VioProcessor::prepare_image(const ImageFrame& frame, VioReport& report) {
@@ -115,21 +119,50 @@ bool VioProcessor::prepare_image(const ImageFrame& frame, VioReport& report) {
   return true;
 }
 
-void VioProcessor::build_depth_image(const State& x,
-                                     const std::vector<Eigen::Vector3d>& scan_world) {
-  std::fill(depth_.begin(), depth_.end(), kInf);
+void VioProcessor::for_range(std::size_t n, std::size_t grain,
+                             const std::function<void(std::size_t, std::size_t)>& fn) const {
+  if (runner_ != nullptr) {
+    parallel_for(*runner_, n, grain, fn);
+  } else {
+    fn(0, n);
+  }
+}
+
+void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3d>& scan_world) {
   const Eigen::Isometry3d T_cw = extrinsic_.T_world_cam(x).inverse();
   const Eigen::Matrix3d R = T_cw.linear();
   const Eigen::Vector3d t = T_cw.translation();
-  for (const auto& p : scan_world) {
-    const Eigen::Vector3d pc = R * p + t;
-    if (pc.z() <= 0.05) continue;
-    const auto px = camera_.project(pc);
-    if (!px || !camera_.in_image(*px)) continue;
-    const int cx = static_cast<int>(px->x()) / kDepthCell;
-    const int cy = static_cast<int>(px->y()) / kDepthCell;
+  const std::size_t n = scan_world.size();
+  scan_px_.resize(n);
+  scan_range_.resize(n);
+  const double cos_fov = cos_half_fov_;
+  for_range(n, 2048, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      scan_range_[i] = -1.0F;
+      const Eigen::Vector3d pc = R * scan_world[i] + t;
+      if (pc.z() <= 0.05) continue;
+      // Outside the cone around the optical axis that holds the image: no projection needed.
+      if (pc.z() < cos_fov * pc.norm()) continue;
+      const auto px = camera_.project(pc);
+      if (!px || !camera_.in_image(*px)) continue;
+      scan_px_[i] = px->cast<float>();
+      scan_range_[i] = static_cast<float>(pc.norm());
+    }
+  });
+  // The visual voxels to look in: those of the scan's points in the image (FAST-LIVO2 takes the
+  // voxels of the whole scan; the others hold nothing the camera sees).
+  scan_keys_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (scan_range_[i] >= 0.0F) scan_keys_.push_back(map_.key(scan_world[i]));
+  }
+  // The sparse depth image: the nearest LiDAR return per cell.
+  std::fill(depth_.begin(), depth_.end(), kInf);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (scan_range_[i] < 0.0F) continue;
+    const int cx = static_cast<int>(scan_px_[i].x()) / kDepthCell;
+    const int cy = static_cast<int>(scan_px_[i].y()) / kDepthCell;
     float& d = depth_[static_cast<std::size_t>(cy * depth_cols_ + cx)];
-    d = std::min(d, static_cast<float>(pc.norm()));
+    d = std::min(d, scan_range_[i]);
   }
 }
 
@@ -164,7 +197,7 @@ bool VioProcessor::warp_reference(const State& x, Patch& patch, float* out) cons
   const Eigen::Vector3d n_ref = params_.normal_en
                                     ? Eigen::Vector3d(T_wr.linear().transpose() * vp.normal)
                                     : Eigen::Vector3d(-p_ref.normalized());
-  const auto A = affine_warp(camera_, T_cur_ref, ref.pixel, p_ref, n_ref, 0.5 * P);
+  const auto A = affine_warp(camera_, T_cur_ref, p_ref, n_ref);
   if (!A || std::abs(A->determinant()) < 1e-6) return false;
   const Eigen::Matrix2d A_ref_cur = A->inverse();
   const std::size_t n = static_cast<std::size_t>(P * P);
@@ -177,8 +210,7 @@ bool VioProcessor::warp_reference(const State& x, Patch& patch, float* out) cons
   return patch.level_mask != 0;
 }
 
-void VioProcessor::select(const State& x, const std::vector<Eigen::Vector3d>& scan_world,
-                          VioReport& report) {
+void VioProcessor::select(const State& x, VioReport& report) {
   const int P = params_.patch_size;
   const int L = params_.pyramid_levels;
   const std::size_t cells = static_cast<std::size_t>(grid_cols_ * grid_rows_);
@@ -186,7 +218,7 @@ void VioProcessor::select(const State& x, const std::vector<Eigen::Vector3d>& sc
   refs_.clear();
   cell_point_.assign(cells, -1);
   cell_depth_.assign(cells, kInf);
-  map_.gather(scan_world, candidates_);
+  map_.gather(scan_keys_, candidates_);
   const Eigen::Isometry3d T_wc = extrinsic_.T_world_cam(x);
   const Eigen::Isometry3d T_cw = T_wc.inverse();
   const double border = 0.5 * P + 1.0;
@@ -240,18 +272,24 @@ void VioProcessor::select(const State& x, const std::vector<Eigen::Vector3d>& sc
 double VioProcessor::gate(const State& x, VioReport& report) {
   const int P = params_.patch_size;
   const std::size_t n = static_cast<std::size_t>(P * P);
-  PatchEval e;
   // The exposure change first, robustly (median of the patches' mean ratios): a camera's auto
   // exposure doubling the brightness would otherwise fail every patch at the gate.
   ratios_.clear();
-  for (const Patch& p : patches_) {
+  ratios_.reserve(patches_.size());
+  gate_evals_.resize(patches_.size());
+  for (std::size_t i = 0; i < patches_.size(); ++i) {
+    Patch& p = patches_[i];
     const int l = lowest_level(p.level_mask);
-    if (!evaluate_patch(pyramid_.level(l), l, P, p.px, 1.0, nullptr, e)) continue;
+    PatchEval& ev = gate_evals_[i];
+    if (!evaluate_patch(pyramid_.level(l), l, P, p.px, 1.0, nullptr, ev)) {
+      ev.pixels = 0;
+      continue;
+    }
     double cur = 0.0;
     double ref = 0.0;
     const float* r = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
     for (std::size_t k = 0; k < n; ++k) {
-      cur += e.intensity[k];
+      cur += ev.intensity[k];
       ref += r[k];
     }
     if (cur > static_cast<double>(n)) ratios_.push_back(ref / cur);
@@ -264,12 +302,18 @@ double VioProcessor::gate(const State& x, VioReport& report) {
   }
   double sq = 0.0;
   int used = 0;
-  for (Patch& p : patches_) {
+  const auto t = static_cast<float>(tau);
+  for (std::size_t i = 0; i < patches_.size(); ++i) {
+    Patch& p = patches_[i];
+    if (gate_evals_[i].pixels == 0) continue;
     const int l = lowest_level(p.level_mask);
     const float* r = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
-    if (!evaluate_patch(pyramid_.level(l), l, P, p.px, tau, r, e)) continue;
+    const PatchEval& ev = gate_evals_[i];
     double mse = 0.0;
-    for (std::size_t k = 0; k < n; ++k) mse += static_cast<double>(e.residual[k]) * e.residual[k];
+    for (std::size_t k = 0; k < n; ++k) {
+      const double d = t * ev.intensity[k] - r[k];
+      mse += d * d;
+    }
     mse /= static_cast<double>(n);
     p.rms_before = static_cast<float>(std::sqrt(mse));
     if (mse > params_.outlier_threshold) {
@@ -301,21 +345,41 @@ void VioProcessor::update(Belief& belief, double tau_start, VioReport& report) {
   if (params_.exposure_estimate) x.inv_exposure = tau_start;
   StateMatrix A_last = StateMatrix::Zero();
   bool have_step = false;
-  PatchEval e;
   for (int level = params_.pyramid_levels - 1; level >= 0; --level) {
     double last_cost = std::numeric_limits<double>::infinity();
     State x_prev = x;
     StateMatrix A_prev = A_last;
     for (int it = 0; it < params_.max_iterations; ++it) {
+      // Patches in fixed blocks, summed in block order: the same sums for any thread count.
+      constexpr std::size_t kBlock = 16;
+      const std::size_t blocks = (patches_.size() + kBlock - 1) / kBlock;
+      block_sums_.assign(blocks, PatchNormals{});
+      for_range(blocks, 1, [&](std::size_t b0, std::size_t b1) {
+        PatchEval e;
+        for (std::size_t b = b0; b < b1; ++b) {
+          PatchNormals& acc = block_sums_[b];
+          const std::size_t end = std::min(patches_.size(), (b + 1) * kBlock);
+          for (std::size_t i = b * kBlock; i < end; ++i) {
+            const Patch& p = patches_[i];
+            if (!p.used || ((p.level_mask >> level) & 1U) == 0) continue;
+            PoseJacobian J;
+            const auto px = project_from_state(camera_, extrinsic_, x, map_.at(p.id).p_world, &J);
+            if (!px) continue;
+            const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(level) * n;
+            if (!evaluate_patch(pyramid_.level(level), level, P, *px, x.inv_exposure, ref, e)) {
+              continue;
+            }
+            accumulate_patch(e, J, huber, params_.exposure_estimate, acc);
+          }
+        }
+      });
       PatchNormals sum;
-      for (const Patch& p : patches_) {
-        if (!p.used || ((p.level_mask >> level) & 1U) == 0) continue;
-        PoseJacobian J;
-        const auto px = project_from_state(camera_, extrinsic_, x, map_.at(p.id).p_world, &J);
-        if (!px) continue;
-        const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(level) * n;
-        if (!evaluate_patch(pyramid_.level(level), level, P, *px, x.inv_exposure, ref, e)) continue;
-        accumulate_patch(e, J, huber, params_.exposure_estimate, sum);
+      for (const auto& b : block_sums_) {
+        sum.HtWH += b.HtWH;
+        sum.HtWr += b.HtWr;
+        sum.cost += b.cost;
+        sum.sq_error += b.sq_error;
+        sum.pixels += b.pixels;
       }
       if (sum.pixels == 0) break;
       const double cost = sum.cost / sum.pixels;
@@ -363,26 +427,77 @@ bool VioProcessor::capture(const State& x, const Eigen::Vector2d& px, PatchObser
   return true;
 }
 
-void VioProcessor::refresh_reference(VisualPoint& point) const {
-  auto& obs = point.observations;
-  if (obs.size() < 2) {
-    point.reference = 0;
-    return;
-  }
+void VioProcessor::unit_patch(const PatchObservation& obs, float* out) const {
   const int P = params_.patch_size;
   const int S = block_edge(P);
-  // FAST-LIVO2's score: mean |NCC| with the other patches plus the cosine of the viewing angle.
-  std::size_t best = 0;
-  for (std::size_t i = 0; i < obs.size(); ++i) {
-    double sum = 0.0;
-    for (std::size_t j = 0; j < obs.size(); ++j) {
-      if (j != i) sum += std::abs(ncc(obs[i].block(0, S), obs[j].block(0, S), S, P));
+  const std::size_t n = static_cast<std::size_t>(P * P);
+  const int start = (S - P) / 2;
+  const std::uint8_t* b = obs.block(0, S);
+  double mean = 0.0;
+  for (int y = 0; y < P; ++y) {
+    for (int x = 0; x < P; ++x) {
+      out[y * P + x] = static_cast<float>(b[(start + y) * S + start + x]);
+      mean += out[y * P + x];
     }
-    const Eigen::Vector3d ray = (point.p_world - obs[i].p_world_cam).normalized();
-    const double score =
-        sum / static_cast<double>(obs.size() - 1) + std::abs(ray.dot(point.normal));
-    obs[i].score = static_cast<float>(score);
-    if (obs[i].score > obs[best].score) best = i;
+  }
+  mean /= static_cast<double>(n);
+  double norm = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    out[k] -= static_cast<float>(mean);
+    norm += static_cast<double>(out[k]) * out[k];
+  }
+  const float inv = norm > 1e-9 ? static_cast<float>(1.0 / std::sqrt(norm)) : 0.0F;
+  for (std::size_t k = 0; k < n; ++k) out[k] *= inv;
+}
+
+void VioProcessor::add_observation(VisualPoint& point, PatchObservation obs) {
+  auto& all = point.observations;
+  const std::size_t n = static_cast<std::size_t>(params_.patch_size * params_.patch_size);
+  ncc_work_.resize(2 * n);
+  float* u_new = ncc_work_.data();
+  float* u = ncc_work_.data() + n;
+  auto abs_dot = [n](const float* a, const float* b) {
+    float dot = 0.0F;
+    for (std::size_t k = 0; k < n; ++k) dot += a[k] * b[k];
+    return std::abs(dot);
+  };
+  // FAST-LIVO2's reference score: mean |NCC| of the level-0 patch with the point's other patches
+  // plus the cosine of the viewing angle. The NCC sums are kept per patch and updated for the one
+  // added and the one dropped (O(n) patch products instead of O(n^2)).
+  unit_patch(obs, u_new);
+  obs.ncc_sum = 0.0F;
+  for (auto& o : all) {
+    unit_patch(o, u);
+    const float d = abs_dot(u_new, u);
+    o.ncc_sum += d;
+    obs.ncc_sum += d;
+  }
+  all.push_back(std::move(obs));
+  auto score_all = [&] {
+    std::size_t best = 0;
+    const double others = static_cast<double>(std::max<std::size_t>(1, all.size() - 1));
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      const Eigen::Vector3d ray = (point.p_world - all[i].p_world_cam).normalized();
+      all[i].score = static_cast<float>(all[i].ncc_sum / others + std::abs(ray.dot(point.normal)));
+      if (all[i].score > all[best].score) best = i;
+    }
+    return best;
+  };
+  std::size_t best = score_all();
+  if (all.size() > static_cast<std::size_t>(params_.max_observations)) {
+    // Drop the lowest-scoring patch that is not the best one.
+    std::size_t worst = best == 0 ? 1 : 0;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (i != best && all[i].score < all[worst].score) worst = i;
+    }
+    unit_patch(all[worst], u_new);
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (i == worst) continue;
+      unit_patch(all[i], u);
+      all[i].ncc_sum = std::max(0.0F, all[i].ncc_sum - abs_dot(u_new, u));
+    }
+    all.erase(all.begin() + static_cast<std::ptrdiff_t>(worst));
+    best = score_all();
   }
   point.reference = static_cast<std::uint32_t>(best);
 }
@@ -461,19 +576,9 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
     if (!moved) continue;
     PatchObservation obs;
     if (!capture(x, *px, obs)) continue;
-    vp.observations.push_back(std::move(obs));
     ++report.new_observations;
     refine_normal(vp, center, lidar_map);
-    refresh_reference(vp);
-    if (vp.observations.size() > static_cast<std::size_t>(params_.max_observations)) {
-      // Drop the lowest-scoring patch that is not the reference.
-      std::size_t worst = vp.reference == 0 ? 1 : 0;
-      for (std::size_t i = 0; i < vp.observations.size(); ++i) {
-        if (i != vp.reference && vp.observations[i].score < vp.observations[worst].score) worst = i;
-      }
-      vp.observations.erase(vp.observations.begin() + static_cast<std::ptrdiff_t>(worst));
-      if (worst < vp.reference) --vp.reference;
-    }
+    add_observation(vp, std::move(obs));
   }
   report.rms_after = tracked > 0 ? std::sqrt(sq_after / tracked) : 0.0;
 
@@ -485,11 +590,13 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
   std::vector<std::uint8_t>& tried = cell_tried_;
   tried.assign(cells, 0);
   const double border = (0.5 * S + 1.0) * std::ldexp(1.0, L - 1);
+  // Cells from the scan's pixels at the prior pose (the update moves them by a fraction of a
+  // pixel); a new point's own pixel is computed again at the updated pose below.
   for (std::size_t i = 0; i < scan_world.size() && i < scan_normals.size(); ++i) {
-    if (scan_normals[i].isZero()) continue;
-    const Eigen::Vector3d pc = T_cw * scan_world[i];
-    const auto px = camera_.project(pc);
-    if (!px || !camera_.in_image(*px, border)) continue;
+    if (scan_range_[i] < 0.0F || scan_normals[i].isZero()) continue;
+    const Eigen::Vector2d pxd = scan_px_[i].cast<double>();
+    const auto* px = &pxd;
+    if (!camera_.in_image(*px, border)) continue;
     const auto cell = static_cast<std::size_t>(static_cast<int>(px->y()) / cell_px * grid_cols_ +
                                                static_cast<int>(px->x()) / cell_px);
     if (occupied[cell] != 0 || tried[cell] >= kCandidatesPerCell) continue;
@@ -539,31 +646,38 @@ VioReport VioProcessor::process(const ImageFrame& frame, Belief& belief,
                                 const std::vector<Eigen::Vector3d>& scan_normals,
                                 const VoxelMap& lidar_map, bool debug) {
   const auto t_total = Clock::now();
+  const double cpu0 = thread_cpu_ms();
   VioReport report;
   debug_ = debug;
   auto t0 = Clock::now();
+  double c0 = cpu0;
+  auto lap = [&](double& wall, double& cpu) {
+    const double c = thread_cpu_ms();
+    wall = ms_since(t0);
+    cpu = c - c0;
+    t0 = Clock::now();
+    c0 = c;
+  };
   if (!prepare_image(frame, report)) return report;
   report.ran = true;
   ++frame_;
-  report.timings.pyramid_ms = ms_since(t0);
+  lap(report.timings.pyramid_ms, report.timings.pyramid_cpu_ms);
 
-  t0 = Clock::now();
-  build_depth_image(belief.x, scan_world);
-  select(belief.x, scan_world, report);
+  project_scan(belief.x, scan_world);
+  select(belief.x, report);
   const double tau_start = gate(belief.x, report);
-  report.timings.selection_ms = ms_since(t0);
+  lap(report.timings.selection_ms, report.timings.selection_cpu_ms);
 
-  t0 = Clock::now();
   update(belief, tau_start, report);
-  report.timings.update_ms = ms_since(t0);
+  lap(report.timings.update_ms, report.timings.update_cpu_ms);
 
-  t0 = Clock::now();
   maintain(belief.x, scan_world, scan_normals, lidar_map, report);
   if (frame_ % 10 == 1) map_stats_ = map_.stats();
   report.map = map_stats_;
-  report.timings.map_ms = ms_since(t0);
+  lap(report.timings.map_ms, report.timings.map_cpu_ms);
   report.inv_exposure = belief.x.inv_exposure;
   report.timings.total_ms = ms_since(t_total);
+  report.timings.cpu_ms = thread_cpu_ms() - cpu0;
   return report;
 }
 

@@ -40,14 +40,12 @@ void VisualMap::remove(std::uint32_t id) {
   free_.push_back(id);
 }
 
-void VisualMap::gather(const std::vector<Eigen::Vector3d>& points,
-                       std::vector<std::uint32_t>& ids) {
+void VisualMap::gather(const std::vector<VoxelKey>& keys, std::vector<std::uint32_t>& ids) {
   ids.clear();
   ++visit_;
   VoxelKey last{};
   bool have_last = false;
-  for (const auto& p : points) {
-    const VoxelKey key = voxel_key(p, voxel_size_);
+  for (const auto& key : keys) {
     if (have_last && key == last) continue;
     last = key;
     have_last = true;

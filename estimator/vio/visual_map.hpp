@@ -35,6 +35,7 @@ struct PatchObservation {
   Eigen::Vector2d pixel = Eigen::Vector2d::Zero();  // level 0, where the point was seen
   float inv_exposure = 1.0F;                        // tau of that image
   float score = 0.0F;                               // reference score (last refresh)
+  float ncc_sum = 0.0F;  // sum of |NCC| of its level-0 patch with the point's other patches
   // levels x block_edge^2 pixels, row-major per level; level l's block holds the integer pixels
   // around the point's level-l position, which sits at block_pos[l] inside it.
   std::vector<std::uint8_t> blocks;
@@ -80,9 +81,11 @@ class VisualMap {
   [[nodiscard]] VisualPoint& at(std::uint32_t id) { return points_[id]; }
   [[nodiscard]] const VisualPoint& at(std::uint32_t id) const { return points_[id]; }
 
-  // Ids of the points in the voxels holding any of `points` (world), each once; consecutive
-  // points in the same voxel cost one lookup (scans arrive in spatial order).
-  void gather(const std::vector<Eigen::Vector3d>& points, std::vector<std::uint32_t>& ids);
+  // The voxel of a world point.
+  [[nodiscard]] VoxelKey key(const Eigen::Vector3d& p) const { return voxel_key(p, voxel_size_); }
+  // Ids of the points in the voxels `keys` name, each once; runs of equal keys cost one lookup
+  // (scans arrive in spatial order).
+  void gather(const std::vector<VoxelKey>& keys, std::vector<std::uint32_t>& ids);
 
   // Drops the voxels outside the LiDAR map's box once the sensor moved slide_threshold since the
   // last slide (the LiDAR map's rule). Returns the number of points removed.

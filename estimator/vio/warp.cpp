@@ -6,30 +6,23 @@ namespace livod::estimator::vio {
 
 std::optional<Eigen::Matrix2d> affine_warp(const CameraModel& camera,
                                            const Eigen::Isometry3d& T_cur_ref,
-                                           const Eigen::Vector2d& px_ref,
                                            const Eigen::Vector3d& p_ref,
-                                           const Eigen::Vector3d& n_ref, double half) {
-  const double n_dot_p = n_ref.dot(p_ref);
-  // The pixel `offset` away from px_ref, through the plane, in the current image.
-  auto through_plane = [&](const Eigen::Vector2d& offset) -> std::optional<Eigen::Vector2d> {
-    const auto ray = camera.unproject(px_ref + offset);
-    if (!ray) return std::nullopt;
-    const double denom = n_ref.dot(*ray);
-    // Grazing rays (the plane nearly edge-on) give no stable intersection.
-    if (std::abs(denom) < 1e-6) return std::nullopt;
-    const double depth = n_dot_p / denom;
-    if (!(depth > 0.0)) return std::nullopt;
-    return camera.project(T_cur_ref * (depth * *ray));
-  };
-  const auto xp = through_plane({half, 0.0});
-  const auto xm = through_plane({-half, 0.0});
-  const auto yp = through_plane({0.0, half});
-  const auto ym = through_plane({0.0, -half});
-  if (!xp || !xm || !yp || !ym) return std::nullopt;
-  Eigen::Matrix2d A;
-  A.col(0) = (*xp - *xm) / (2.0 * half);
-  A.col(1) = (*yp - *ym) / (2.0 * half);
-  return A;
+                                           const Eigen::Vector3d& n_ref) {
+  // Two tangent directions of the plane.
+  const Eigen::Vector3d helper =
+      std::abs(n_ref.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  Eigen::Matrix<double, 3, 2> B;
+  B.col(0) = n_ref.cross(helper).normalized();
+  B.col(1) = n_ref.cross(B.col(0));
+  Eigen::Matrix<double, 2, 3> J_ref;
+  Eigen::Matrix<double, 2, 3> J_cur;
+  if (!camera.project(p_ref, &J_ref) || !camera.project(T_cur_ref * p_ref, &J_cur)) {
+    return std::nullopt;
+  }
+  const Eigen::Matrix2d M_ref = J_ref * B;
+  // Edge-on: the surface covers no area in the reference image.
+  if (std::abs(M_ref.determinant()) < 1e-9 * M_ref.squaredNorm()) return std::nullopt;
+  return Eigen::Matrix2d(J_cur * T_cur_ref.linear() * B * M_ref.inverse());
 }
 
 int reference_level_offset(const Eigen::Matrix2d& A_ref_cur) {

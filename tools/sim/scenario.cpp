@@ -310,18 +310,18 @@ Scenario make_scenario(const std::string& name) {
     return s;
   }
   if (name == "room_handheld_os1_64_camera_faults") {
-    // Auto-exposure-like steps (x2 at 8 s, x0.5 at 14 s) and a camera that stops for 5 s
-    // (18-23 s). A fixed base exposure, low enough that the doubled one does not saturate.
+    // Auto-exposure-like steps (x2 at 6 s, x0.5 at 10 s) and a camera that stops for 5 s
+    // (13-18 s). A fixed base exposure, low enough that the doubled one does not saturate.
     Scenario s = base(name,
                       "indoor room, handheld walk, Ouster OS1-64 + camera whose exposure steps x2 "
                       "and x0.5 and whose images stop for 5 s",
-                      WorldKind::kRoom, handheld_room(), 30.0);
+                      WorldKind::kRoom, handheld_room(), 22.0);
     s.lidars.push_back(ouster("OS1-64", "os1"));
     CameraMount cam = rig_camera();
     cam.params.exposure_s = 0.002;
     cam.params.exposure_variation = 0.0;
-    cam.params.exposure_steps = {{8.0, 2.0}, {14.0, 0.5}};
-    cam.params.outages = {{18.0, 23.0}};
+    cam.params.exposure_steps = {{6.0, 2.0}, {10.0, 0.5}};
+    cam.params.outages = {{13.0, 18.0}};
     s.cameras.push_back(cam);
     s.body_imu = "os1";
     return s;
