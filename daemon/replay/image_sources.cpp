@@ -1,5 +1,7 @@
 #include "daemon/replay/image_sources.hpp"
 
+#include "daemon/replay/image_decoding.hpp"
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -23,50 +25,6 @@ namespace rb = io::rosbag;
 // Frames that all fail from the start mean a wrong folder or topic, not a damaged frame.
 constexpr std::uint64_t kGiveUpAfter = 10;
 
-// 8-bit mono or BGR, whatever the recording stored.
-cv::Mat to_mono_or_bgr(const cv::Mat& in) {
-  cv::Mat m = in;
-  if (m.depth() == CV_16U) {
-    cv::Mat scaled;
-    m.convertTo(scaled, CV_8U, 1.0 / 256.0);
-    m = scaled;
-  } else if (m.depth() != CV_8U) {
-    throw Error("unsupported pixel depth (8 or 16 bits per channel)");
-  }
-  if (m.channels() == 4) {
-    cv::Mat bgr;
-    cv::cvtColor(m, bgr, cv::COLOR_BGRA2BGR);
-    m = bgr;
-  } else if (m.channels() != 1 && m.channels() != 3) {
-    throw Error("unsupported channel count " + std::to_string(m.channels()));
-  }
-  return m;
-}
-
-// A decimal number of seconds ("1403715273.262142", "12", "1.036400e-01") in ns, exact for plain
-// decimals (a double would round the nanoseconds of an epoch time).
-std::int64_t parse_seconds_ns(const std::string& text, const std::string& where) {
-  const bool plain = text.find_first_of("eE") == std::string::npos;
-  try {
-    if (!plain) return static_cast<std::int64_t>(std::llround(std::stod(text) * 1e9));
-    const bool negative = !text.empty() && text[0] == '-';
-    const std::string body = negative ? text.substr(1) : text;
-    const auto dot = body.find('.');
-    const std::string whole = body.substr(0, dot);
-    std::string frac = dot == std::string::npos ? "" : body.substr(dot + 1);
-    if (whole.empty() && frac.empty()) throw std::invalid_argument("empty");
-    for (const char c : whole + frac) {
-      if (std::isdigit(static_cast<unsigned char>(c)) == 0) throw std::invalid_argument("digit");
-    }
-    frac = (frac + "000000000").substr(0, 9);
-    const std::int64_t ns =
-        (whole.empty() ? 0 : std::stoll(whole)) * 1'000'000'000LL + std::stoll(frac);
-    return negative ? -ns : ns;
-  } catch (const std::exception&) {
-    throw Error(where + ": '" + text + "' is not a time in seconds");
-  }
-}
-
 struct FolderFrame {
   std::int64_t time_ns = 0;
   std::filesystem::path path;
@@ -81,36 +39,18 @@ bool is_image_file(const std::filesystem::path& p) {
          ext == ".bmp" || ext == ".tif" || ext == ".tiff";
 }
 
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw Error("cannot read " + file.string());
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 std::vector<FolderFrame> read_timestamps_txt(const std::filesystem::path& folder) {
   const auto file = folder / "timestamps.txt";
-  std::ifstream in(file);
-  if (!in) throw Error("cannot read " + file.string());
   std::vector<FolderFrame> frames;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
-    std::istringstream fields(line);
-    std::string time;
-    std::string name;
-    if (!(fields >> time)) continue;  // blank or comment
-    const std::string where = file.string() + ":" + std::to_string(number);
-    if (!(fields >> name)) throw Error(where + ": expected '<time> <file>'");
-    // Seconds with a decimal point or an exponent; a bare integer is nanoseconds (EuRoC style).
-    const bool seconds = time.find_first_of(".eE") != std::string::npos;
-    std::int64_t ns = 0;
-    if (seconds) {
-      ns = parse_seconds_ns(time, where);
-    } else {
-      try {
-        std::size_t used = 0;
-        ns = std::stoll(time, &used);
-        if (used != time.size()) throw std::invalid_argument("trailing");
-      } catch (const std::exception&) {
-        throw Error(where + ": '" + time + "' is neither seconds nor integer nanoseconds");
-      }
-    }
+  for (const auto& [ns, name] : parse_timestamps_txt(read_text(file), file.string())) {
     frames.push_back({ns, folder / name, std::nullopt});
   }
   return frames;
@@ -123,24 +63,14 @@ std::vector<FolderFrame> read_times_txt(const std::filesystem::path& folder) {
     if (entry.is_regular_file() && is_image_file(entry.path())) images.push_back(entry.path());
   }
   std::sort(images.begin(), images.end());
-  std::ifstream in(file);
-  if (!in) throw Error("cannot read " + file.string());
-  std::vector<FolderFrame> frames;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    std::istringstream fields(line);
-    std::string time;
-    if (!(fields >> time) || time[0] == '#') continue;
-    frames.push_back(
-        {parse_seconds_ns(time, file.string() + ":" + std::to_string(number)), {}, std::nullopt});
-  }
-  if (frames.size() != images.size()) {
-    throw Error(fmt::format("{}: {} times for {} images in {}", file.string(), frames.size(),
+  const auto times = parse_times_txt(read_text(file), file.string());
+  if (times.size() != images.size()) {
+    throw Error(fmt::format("{}: {} times for {} images in {}", file.string(), times.size(),
                             images.size(), folder.string()));
   }
-  for (std::size_t i = 0; i < frames.size(); ++i) frames[i].path = images[i];
+  std::vector<FolderFrame> frames;
+  for (std::size_t i = 0; i < times.size(); ++i)
+    frames.push_back({times[i], images[i], std::nullopt});
   return frames;
 }
 
@@ -242,65 +172,6 @@ class ImageFolderSource final : public ReplaySource {
   FrameErrors errors_;
 };
 
-// Raw sensor_msgs/Image bytes as a cv::Mat (copied: the bag's buffer is reused).
-cv::Mat image_from_message(const rb::sensor_msgs::Image& m) {
-  const std::string& e = m.encoding;
-  int type = 0;
-  int bayer = -1;
-  int rgb_order = -1;
-  if (e == "mono8" || e == "8UC1") {
-    type = CV_8UC1;
-  } else if (e == "mono16" || e == "16UC1") {
-    type = CV_16UC1;
-  } else if (e == "bgr8" || e == "8UC3") {
-    type = CV_8UC3;
-  } else if (e == "rgb8") {
-    type = CV_8UC3;
-    rgb_order = cv::COLOR_RGB2BGR;
-  } else if (e == "bgra8" || e == "8UC4") {
-    type = CV_8UC4;
-  } else if (e == "rgba8") {
-    type = CV_8UC4;
-    rgb_order = cv::COLOR_RGBA2BGR;
-  } else if (e == "bayer_rggb8") {
-    // OpenCV names Bayer patterns by the second row's first two pixels.
-    type = CV_8UC1;
-    bayer = cv::COLOR_BayerBG2BGR;
-  } else if (e == "bayer_bggr8") {
-    type = CV_8UC1;
-    bayer = cv::COLOR_BayerRG2BGR;
-  } else if (e == "bayer_gbrg8") {
-    type = CV_8UC1;
-    bayer = cv::COLOR_BayerGR2BGR;
-  } else if (e == "bayer_grbg8") {
-    type = CV_8UC1;
-    bayer = cv::COLOR_BayerGB2BGR;
-  } else {
-    throw Error("unsupported image encoding '" + e + "'");
-  }
-  const int w = static_cast<int>(m.width);
-  const int h = static_cast<int>(m.height);
-  const std::size_t row = static_cast<std::size_t>(w) * CV_ELEM_SIZE(type);
-  if (w <= 0 || h <= 0 || m.step < row ||
-      m.data.size() < static_cast<std::size_t>(m.step) * static_cast<std::size_t>(h - 1) + row) {
-    throw Error(fmt::format("image {}x{} {} with step {} and {} bytes is inconsistent", w, h, e,
-                            m.step, m.data.size()));
-  }
-  if (m.is_bigendian != 0 && CV_MAT_DEPTH(type) == CV_16U) {
-    throw Error("big-endian 16-bit images are not supported");
-  }
-  const cv::Mat view(h, w, type, const_cast<std::uint8_t*>(m.data.data()), m.step);
-  cv::Mat out;
-  if (bayer >= 0) {
-    cv::cvtColor(view, out, bayer);
-  } else if (rgb_order >= 0) {
-    cv::cvtColor(view, out, rgb_order);
-  } else {
-    out = view.clone();
-  }
-  return to_mono_or_bgr(out);
-}
-
 class BagImageSource final : public ReplaySource {
  public:
   BagImageSource(const std::filesystem::path& file, const std::string& topic, std::string sensor)
@@ -347,15 +218,11 @@ class BagImageSource final : public ReplaySource {
     try {
       if (compressed_) {
         m.decode_into(compressed_msg_);
-        const cv::Mat bytes(1, static_cast<int>(compressed_msg_.data.size()), CV_8UC1,
-                            compressed_msg_.data.data());
-        const cv::Mat raw = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-        if (raw.empty()) throw Error("cannot decode the " + compressed_msg_.format + " image");
-        frame.image = to_mono_or_bgr(raw);
+        frame.image = decode_compressed_image(compressed_msg_);
         frame.stamp.sensor = SensorTime(compressed_msg_.header.stamp.to_ns());
       } else {
         m.decode_into(image_msg_);
-        frame.image = image_from_message(image_msg_);
+        frame.image = decode_image_message(image_msg_);
         frame.stamp.sensor = SensorTime(image_msg_.header.stamp.to_ns());
       }
     } catch (const std::exception& e) {

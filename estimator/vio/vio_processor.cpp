@@ -594,14 +594,13 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
   // pixel); a new point's own pixel is computed again at the updated pose below.
   for (std::size_t i = 0; i < scan_world.size() && i < scan_normals.size(); ++i) {
     if (scan_range_[i] < 0.0F || scan_normals[i].isZero()) continue;
-    const Eigen::Vector2d pxd = scan_px_[i].cast<double>();
-    const auto* px = &pxd;
-    if (!camera_.in_image(*px, border)) continue;
-    const auto cell = static_cast<std::size_t>(static_cast<int>(px->y()) / cell_px * grid_cols_ +
-                                               static_cast<int>(px->x()) / cell_px);
+    const Eigen::Vector2d px = scan_px_[i].cast<double>();
+    if (!camera_.in_image(px, border)) continue;
+    const auto cell = static_cast<std::size_t>(static_cast<int>(px.y()) / cell_px * grid_cols_ +
+                                               static_cast<int>(px.x()) / cell_px);
     if (occupied[cell] != 0 || tried[cell] >= kCandidatesPerCell) continue;
     ++tried[cell];
-    const auto score = static_cast<float>(shi_tomasi_score(grey_, *px, P));
+    const auto score = static_cast<float>(shi_tomasi_score(grey_, px, P));
     if (score > best_score[cell]) {
       best_score[cell] = score;
       best_index[cell] = static_cast<std::int32_t>(i);
