@@ -284,6 +284,23 @@ TEST(MeasurementSync, AScanEndIsNotSwallowedByALaterImageArrivingWithTheNextScan
   expect_points_partitioned(groups, 1899 * kMs);
 }
 
+TEST(MeasurementSync, ImagesUpToAScanPeriodLateAreUsed) {
+  // A camera delivering 80 ms after mid-exposure: every image still gets its group.
+  MeasurementSync sync;
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  std::vector<std::int64_t> images;
+  for (std::int64_t t = 50; t < 1000; t += 100) images.push_back(t);
+  const auto groups = run_rig(sync, 1200, images, 80);
+  std::vector<std::int64_t> image_times;
+  for (const auto& g : groups) {
+    if (g.kind == MeasurementGroup::Kind::image) image_times.push_back(g.t_update.ns / kMs);
+  }
+  EXPECT_EQ(image_times, images);
+  EXPECT_EQ(sync.counters().images_late, 0U);
+  expect_points_partitioned(groups, groups.back().t_update.ns);
+}
+
 TEST(MeasurementSync, ASlowCameraLeavesScanEndsToLio) {
   MeasurementSync sync(SyncParams{.image_timeout_s = 0.15});
   sync.enable_images(true);

@@ -47,13 +47,29 @@ inline bool sample_grid(const cv::Mat& img, double x0, double y0, int n, float* 
   const float w01 = ax * (1.0F - ay);
   const float w10 = (1.0F - ax) * ay;
   const float w11 = ax * ay;
+  // Each image row is converted once and used by the two sample rows it borders.
+  float upper[64];
+  float lower[64];
+  const bool small = n + 1 <= 64;
+  const std::uint8_t* r = img.ptr<std::uint8_t>(iy) + ix;
+  if (small) {
+    for (int i = 0; i <= n; ++i) upper[i] = static_cast<float>(r[i]);
+  }
   for (int j = 0; j < n; ++j) {
     const std::uint8_t* r0 = img.ptr<std::uint8_t>(iy + j) + ix;
     const std::uint8_t* r1 = img.ptr<std::uint8_t>(iy + j + 1) + ix;
     float* o = out + j * n;
-    for (int i = 0; i < n; ++i) {
-      o[i] = w00 * static_cast<float>(r0[i]) + w01 * static_cast<float>(r0[i + 1]) +
-             w10 * static_cast<float>(r1[i]) + w11 * static_cast<float>(r1[i + 1]);
+    if (small) {
+      for (int i = 0; i <= n; ++i) lower[i] = static_cast<float>(r1[i]);
+      for (int i = 0; i < n; ++i) {
+        o[i] = w00 * upper[i] + w01 * upper[i + 1] + w10 * lower[i] + w11 * lower[i + 1];
+      }
+      for (int i = 0; i <= n; ++i) upper[i] = lower[i];
+    } else {
+      for (int i = 0; i < n; ++i) {
+        o[i] = w00 * static_cast<float>(r0[i]) + w01 * static_cast<float>(r0[i + 1]) +
+               w10 * static_cast<float>(r1[i]) + w11 * static_cast<float>(r1[i + 1]);
+      }
     }
   }
   return true;

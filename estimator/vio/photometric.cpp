@@ -6,11 +6,37 @@
 
 namespace livod::estimator::vio {
 
+namespace {
+
+// The per-pixel loop, with the patch edge known at compile time for the common 8x8 patch (the
+// compiler then unrolls and vectorises it).
+template <int kP>
+void fill_patch(const float* grid, int P, float t, float g, const float* ref, PatchEval& out) {
+  const int edge = kP > 0 ? kP : P;
+  const int G = edge + 2;
+  int k = 0;
+  for (int j = 1; j <= edge; ++j) {
+    const float* row = grid + j * G;
+    const float* up = row - G;
+    const float* down = row + G;
+    for (int i = 1; i <= edge; ++i, ++k) {
+      const float v = row[i];
+      out.intensity[k] = v;
+      out.residual[k] = t * v - ref[k];
+      out.grad_x[k] = g * (row[i + 1] - row[i - 1]);
+      out.grad_y[k] = g * (down[i] - up[i]);
+    }
+  }
+}
+
+}  // namespace
+
 bool evaluate_patch(const cv::Mat& level_image, int level, int patch_size,
                     const Eigen::Vector2d& px, double tau, const float* ref, PatchEval& out) {
   const int P = patch_size;
   const int G = P + 2;  // the patch and a one-pixel border for central differences
-  std::array<float, (kMaxPatchSize + 2) * (kMaxPatchSize + 2)> grid{};
+  // Not initialised: sample_grid writes every sample used.
+  std::array<float, (kMaxPatchSize + 2) * (kMaxPatchSize + 2)> grid;  // NOLINT
   const Eigen::Vector2d u = ImagePyramid::to_level(px, level);
   const double origin = 0.5 * static_cast<double>(P + 1);
   if (!sample_grid(level_image, u.x() - origin, u.y() - origin, G, grid.data())) return false;
@@ -18,18 +44,12 @@ bool evaluate_patch(const cv::Mat& level_image, int level, int patch_size,
   // d / d u (level 0) = d / d u_l / 2^l; central difference over two level pixels.
   const float g = t * 0.5F / static_cast<float>(1 << level);
   out.pixels = P * P;
-  int k = 0;
-  for (int j = 1; j <= P; ++j) {
-    const float* row = grid.data() + j * G;
-    const float* up = row - G;
-    const float* down = row + G;
-    for (int i = 1; i <= P; ++i, ++k) {
-      const float v = row[i];
-      out.intensity[k] = v;
-      out.residual[k] = t * v - (ref != nullptr ? ref[k] : 0.0F);
-      out.grad_x[k] = g * (row[i + 1] - row[i - 1]);
-      out.grad_y[k] = g * (down[i] - up[i]);
-    }
+  static const std::array<float, kMaxPatchPixels> kZeros{};
+  const float* r = ref != nullptr ? ref : kZeros.data();
+  if (P == 8) {
+    fill_patch<8>(grid.data(), P, t, g, r, out);
+  } else {
+    fill_patch<0>(grid.data(), P, t, g, r, out);
   }
   return true;
 }

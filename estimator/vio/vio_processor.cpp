@@ -35,7 +35,7 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // point.
 constexpr std::uint8_t kMaxFailures = 3;
 // New-point candidates scored per grid cell (Shi-Tomasi costs 64 gradients each).
-constexpr int kCandidatesPerCell = 16;
+constexpr std::uint32_t kCandidatesPerCell = 8;
 
 int lowest_level(std::uint32_t mask) {
   for (int l = 0; l < 32; ++l) {
@@ -591,16 +591,33 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
   tried.assign(cells, 0);
   const double border = (0.5 * S + 1.0) * std::ldexp(1.0, L - 1);
   // Cells from the scan's pixels at the prior pose (the update moves them by a fraction of a
-  // pixel); a new point's own pixel is computed again at the updated pose below.
-  for (std::size_t i = 0; i < scan_world.size() && i < scan_normals.size(); ++i) {
-    if (scan_range_[i] < 0.0F || scan_normals[i].isZero()) continue;
+  // pixel); a new point's own pixel is computed again at the updated pose below. The candidates
+  // of a cell are counted first, so that the ones scored (Shi-Tomasi costs 64 gradients each)
+  // are spread over the cell instead of being its first, neighbouring, points.
+  auto cell_of = [&](std::size_t i) -> std::int64_t {
+    if (scan_range_[i] < 0.0F || i >= scan_normals.size() || scan_normals[i].isZero()) return -1;
     const Eigen::Vector2d px = scan_px_[i].cast<double>();
-    if (!camera_.in_image(px, border)) continue;
+    if (!camera_.in_image(px, border)) return -1;
     const auto cell = static_cast<std::size_t>(static_cast<int>(px.y()) / cell_px * grid_cols_ +
                                                static_cast<int>(px.x()) / cell_px);
-    if (occupied[cell] != 0 || tried[cell] >= kCandidatesPerCell) continue;
+    return occupied[cell] != 0 ? -1 : static_cast<std::int64_t>(cell);
+  };
+  std::vector<std::uint32_t>& count = cell_count_;
+  count.assign(cells, 0);
+  const std::size_t points = std::min(scan_world.size(), scan_normals.size());
+  for (std::size_t i = 0; i < points; ++i) {
+    if (const auto c = cell_of(i); c >= 0) ++count[static_cast<std::size_t>(c)];
+  }
+  std::vector<std::uint32_t>& seen = cell_seen_;
+  seen.assign(cells, 0);
+  for (std::size_t i = 0; i < points; ++i) {
+    const auto c = cell_of(i);
+    if (c < 0) continue;
+    const auto cell = static_cast<std::size_t>(c);
+    const std::uint32_t stride = std::max<std::uint32_t>(1, count[cell] / kCandidatesPerCell);
+    if (seen[cell]++ % stride != 0 || tried[cell] >= kCandidatesPerCell) continue;
     ++tried[cell];
-    const auto score = static_cast<float>(shi_tomasi_score(grey_, px, P));
+    const auto score = static_cast<float>(shi_tomasi_score(grey_, scan_px_[i].cast<double>(), P));
     if (score > best_score[cell]) {
       best_score[cell] = score;
       best_index[cell] = static_cast<std::int32_t>(i);

@@ -175,6 +175,8 @@ class VioProcessor {
   std::vector<double> ratios_;
   std::vector<std::uint8_t> occupied_;
   std::vector<std::uint8_t> cell_tried_;
+  std::vector<std::uint32_t> cell_count_;
+  std::vector<std::uint32_t> cell_seen_;
   std::vector<Eigen::Vector2f> scan_px_;  // the scan's pixels at the prior pose
   std::vector<float> scan_range_;         // their ranges from the camera; < 0: not in the image
   std::vector<VoxelKey> scan_keys_;       // the visual voxels of those in the image

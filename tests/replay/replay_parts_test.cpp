@@ -14,9 +14,9 @@
 #include "daemon/replay/cloud_conversion.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/map_accumulator.hpp"
-#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/replay/timing_report.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
+#include "daemon/runtime/sensor_clock.hpp"
 #include "tests/support/data_dir.hpp"
 
 namespace livod {
