@@ -9,9 +9,11 @@
 // measurement time (the scan end or the image's mid-exposure), never wall-clock time.
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "core/image.hpp"
@@ -43,7 +45,7 @@ struct PipelineOptions {
   std::size_t max_queued_imu = 4000;
   // The camera of the visual update; none: LIO only. Used when params.vio.enabled.
   std::optional<vio::VioCamera> camera;
-  bool colorize = false;   // colour the scan from the image in image groups (last_scan_colors)
+  bool colorize = false;   // colour the scan from the image in image groups (PipelineOutput)
   bool vio_debug = false;  // fill FrameReport::vio.debug with every patch (--debug-images)
 };
 
@@ -79,6 +81,22 @@ struct PipelineOutput {
   State x;
   StateMatrix P;
   FrameReport report;
+  // The frame's points as the update used them (undistorted to t, downsampled), registered in the
+  // world frame with their world covariances (pose uncertainty included). Valid during the
+  // output callback only.
+  std::span<const CovPoint> registered_world;
+  // The LiDAR's pose at t (after both updates in an image group): T_world_imu * T_imu_lidar.
+  Eigen::Isometry3d T_world_lidar = Eigen::Isometry3d::Identity();
+  // Image groups with PipelineOptions::colorize: the same points (in registered_world's order)
+  // placed with the pose after the visual update, their colours (0x00RRGGBB) sampled from the
+  // image and whether each fell inside it (1) or not (0). Empty otherwise. Valid during the output
+  // callback only.
+  std::span<const Eigen::Vector3d> colored_world;
+  std::span<const std::uint32_t> colors;
+  std::span<const std::uint8_t> in_image;
+  // Image groups with PipelineOptions::vio_debug: the grey image the visual update used (its
+  // patches are in report.vio.debug); empty otherwise.
+  cv::Mat vio_grey;
 };
 
 struct PipelineCounters {
@@ -114,8 +132,14 @@ class LioPipeline {
   // Ignored (counted) without a camera or with VIO disabled.
   void add_image(ImageFrame image);
   [[nodiscard]] bool vio_active() const { return vio_ != nullptr; }
-  // Runs every group whose scan end is covered by IMU data.
-  void process(const std::function<void(const PipelineOutput&)>& on_output);
+  // Runs the groups whose update time (scan end or image time) is covered by IMU data, at most
+  // `max_groups` of them (the daemon runs one at a time so that it can drain its rings in
+  // between); returns how many ran.
+  std::size_t process(const std::function<void(const PipelineOutput&)>& on_output,
+                      std::size_t max_groups = SIZE_MAX);
+  // Scans queued for the estimator (waiting for IMU data or for their turn).
+  [[nodiscard]] std::size_t queued_scans() const { return sync_.queued_scans(); }
+  [[nodiscard]] std::size_t queued_imu() const { return sync_.queued_imu(); }
 
   [[nodiscard]] bool initialised() const { return initializer_.done(); }
   [[nodiscard]] const std::string& init_status() const { return initializer_.status(); }
@@ -127,10 +151,6 @@ class LioPipeline {
   [[nodiscard]] const std::vector<Eigen::Vector3d>& last_scan_points() const {
     return undistorted_;
   }
-  // Colours (0x00RRGGBB) of last_scan_points() and whether each was in the image: filled for image
-  // groups when PipelineOptions::colorize is set, empty otherwise.
-  [[nodiscard]] const std::vector<std::uint32_t>& last_scan_colors() const { return colors_; }
-  [[nodiscard]] const std::vector<std::uint8_t>& last_scan_colored() const { return colored_; }
   // The visual half, when active (debug drawing, map statistics).
   [[nodiscard]] const vio::VioProcessor* vio() const { return vio_.get(); }
 

@@ -275,23 +275,4 @@ std::unique_ptr<ReplaySource> make_bag_image_source(const std::filesystem::path&
   return std::make_unique<BagImageSource>(file, topic, sensor.name);
 }
 
-estimator::vio::VioCamera vio_camera(const SensorConfig& sensor) {
-  const CameraConfig& c = sensor.camera;
-  estimator::vio::VioCamera cam;
-  auto& k = cam.intrinsics;
-  k.model = c.model == CameraModel::equidistant ? CameraIntrinsics::Model::kEquidistant
-                                                : CameraIntrinsics::Model::kPinholeRadtan;
-  k.width = c.width;
-  k.height = c.height;
-  k.fx = c.intrinsics[0];
-  k.fy = c.intrinsics[1];
-  k.cx = c.intrinsics[2];
-  k.cy = c.intrinsics[3];
-  for (std::size_t i = 0; i < 4 && i < c.distortion.size(); ++i) k.distortion[i] = c.distortion[i];
-  if (c.distortion.size() == 5) k.radtan_k3 = c.distortion[4];
-  cam.scale = c.scale;
-  cam.T_imu_cam = sensor.T_body_sensor;
-  return cam;
-}
-
 }  // namespace livod::daemon::replay

@@ -22,7 +22,6 @@
 
 #include "daemon/config/config.hpp"
 #include "daemon/replay/sources.hpp"
-#include "estimator/vio/vio_processor.hpp"
 
 namespace livod::daemon::replay {
 
@@ -32,10 +31,5 @@ std::unique_ptr<ReplaySource> make_image_folder_source(const std::filesystem::pa
 std::unique_ptr<ReplaySource> make_bag_image_source(const std::filesystem::path& file,
                                                     const std::string& topic,
                                                     const SensorConfig& sensor);
-
-// The estimator's camera from a camera sensor's configuration: model, size and distortion at full
-// resolution, the configured scale and T_imu_cam = the sensor's T_body_sensor (the body frame is
-// the IMU's).
-estimator::vio::VioCamera vio_camera(const SensorConfig& sensor);
 
 }  // namespace livod::daemon::replay

@@ -260,19 +260,19 @@ std::size_t current_rss_bytes() {
   return static_cast<std::size_t>(resident_pages) * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
 }
 
-FrameTable::FrameTable(const std::filesystem::path& path) : path_(path), out_(path) {
-  if (!out_) throw Error("cannot create " + path.string());
-  out_ << "frame,t,raw_points,used_points,matched,iterations,converged,updated,degenerate,"
-          "translation_ratio,propagate_ms,undistort_ms,downsample_ms,residuals_ms,update_ms,map_ms,"
-          "total_ms,"
-          "cpu_ms,map_planes,map_bytes,exported_points,rss_bytes,image,vio_ms,vio_patches,"
-          "inv_exposure\n";
+FrameTable::FrameTable(const std::filesystem::path& path) : file_(path) {
+  file_.stream()
+      << "frame,t,raw_points,used_points,matched,iterations,converged,updated,degenerate,"
+         "translation_ratio,propagate_ms,undistort_ms,downsample_ms,residuals_ms,update_ms,map_ms,"
+         "total_ms,"
+         "cpu_ms,map_planes,map_bytes,exported_points,rss_bytes,image,vio_ms,vio_patches,"
+         "inv_exposure\n";
 }
 
 void FrameTable::add(std::size_t frame, const estimator::FrameReport& r, double cpu_ms,
                      std::size_t exported_points, std::size_t rss_bytes) {
   const auto& t = r.timings;
-  out_ << fmt::format(
+  file_.stream() << fmt::format(
       "{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{}"
       ","
       "{},{},{},",
@@ -282,14 +282,12 @@ void FrameTable::add(std::size_t frame, const estimator::FrameReport& r, double 
       t.residuals_ms, t.update_ms, t.map_ms, t.total_ms, cpu_ms, r.map.planes, r.map.bytes,
       exported_points, rss_bytes);
   const bool image = r.kind == estimator::MeasurementGroup::Kind::image;
-  out_ << fmt::format("{},{:.4f},{},{:.6g}\n", image ? 1 : 0, r.timings.vio_ms, r.vio.patches,
-                      image ? r.vio.inv_exposure : 0.0);
+  file_.stream() << fmt::format("{},{:.4f},{},{:.6g}\n", image ? 1 : 0, r.timings.vio_ms,
+                                r.vio.patches, image ? r.vio.inv_exposure : 0.0);
 }
 
 void FrameTable::close() {
-  out_.flush();
-  if (!out_) throw Error("cannot write " + path_.string());
-  out_.close();
+  file_.commit();
 }
 
 }  // namespace livod::daemon::replay
