@@ -122,6 +122,10 @@ OpenedSources open_paced(const LivodConfig& config, const SensorRoles& roles,
 }  // namespace
 
 DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options) {
+  // spdlog builds its registry on first use, and the prebuilt libspdlog checks that static's guard
+  // without telling ThreadSanitizer; built here, before any thread starts, every thread that logs
+  // is ordered after it by thread creation.
+  spdlog::default_logger_raw();
   DaemonResult result;
   const SensorRoles roles = assign_roles(config);
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
