@@ -15,6 +15,10 @@
 
 #include "core/measurement.hpp"
 
+namespace livod {
+struct ImageFrame;  // core/image.hpp (kept out of this header: it pulls in OpenCV)
+}  // namespace livod
+
 namespace livod::drivers {
 
 // Counters a decoder keeps; read by health reporting and printed by `livod decode`.
@@ -42,6 +46,9 @@ struct DecoderCounters {
 struct DecoderSinks {
   std::function<void(const LidarScan&)> on_scan;
   std::function<void(const ImuSample&)> on_imu;
+  // Camera frames (image sources): stamp.sensor / stamp.host, exposure and stamp_marks set,
+  // stamp.mapped left to the clock domain. The frame owns its pixels (a sink may keep them).
+  std::function<void(const ImageFrame&)> on_image;
 };
 
 // One received UDP payload. host_time_ns is the receive time (kernel stamp live, the pcap record

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "daemon/replay/decoder_factory.hpp"
 #include "drivers/capture/health.hpp"
 #include "drivers/capture/packet_ring.hpp"
@@ -144,6 +145,11 @@ class PacedRecording final : public MeasurementSource {
         ImuSample s = sample;
         s.stamp.host += Nanoseconds(shift_);
         if (target_->on_imu) target_->on_imu(s);
+      };
+      shifted_.on_image = [this](const ImageFrame& frame) {
+        ImageFrame f = frame;  // shares the pixels
+        f.stamp.host += Nanoseconds(shift_);
+        if (target_->on_image) target_->on_image(f);
       };
     }
     target_ = &sinks;

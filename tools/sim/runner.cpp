@@ -351,6 +351,7 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     SimSensorReport rep{cam.name, "camera", 0, 0, dir};
     const double period = 1.0 / cam.params.rate_hz;
     for (double t = period / 2; t < duration; t += period) {
+      if (cam.params.in_outage(t)) continue;
       const double exposure = sim.exposure_at(t);
       const Eigen::Isometry3d T_world_cam = trajectory.at(t).T_world_body() * cam.T_body_cam;
       const std::int64_t stamp = epoch_host_ns + to_ns(t + cam.time_offset_s);
@@ -434,11 +435,11 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     }
     for (const auto& cam : scenario.cameras) {
       const auto& k = cam.params.intrinsics;
-      // The estimator has no visual update yet: the camera is written (its calibration and images
-      // are part of the sequence) but disabled, as check-config requires.
-      cfg << "  - name: " << cam.name << "\n    driver: v4l2\n    model: generic\n"
-          << "    enabled: false\n"
-          << "    source:\n      replay: {file: mav0/" << cam.name << "}\n"
+      cfg << "  - name: " << cam.name << "\n    driver: v4l2\n    model: generic\n";
+      // Without images (--no-images) the folder lists frames it does not have: the camera stays
+      // in the file, disabled, so that the configuration replays as LiDAR-inertial.
+      if (!options.write_images) cfg << "    enabled: false  # written with --no-images\n";
+      cfg << "    source:\n      replay: {file: mav0/" << cam.name << "}\n"
           << "    camera: {model: "
           << (k.model == CameraIntrinsics::Model::kEquidistant ? "equidistant" : "pinhole")
           << ", width: " << k.width << ", height: " << k.height << ", intrinsics: [" << k.fx << ", "

@@ -654,11 +654,34 @@ TEST(ConfigImplemented, WhatCannotRunIsAnError) {
     camera: {width: 640, height: 512, intrinsics: [500, 500, 320, 256]}
     extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
 )";
-  EXPECT_EQ(not_implemented(camera), std::vector<std::string>{"sensors[1].enabled"});
+  // A live camera: no live camera source runs yet (its recording can be replayed).
+  EXPECT_EQ(not_implemented(camera), std::vector<std::string>{"sensors[1].source"});
   // Disabled, the camera keeps its calibration in the file and is no problem.
   std::string disabled = camera;
   disabled.replace(disabled.find("    driver: aravis"), 0, "    enabled: false\n");
   EXPECT_TRUE(not_implemented(disabled).empty());
+  // Replayed frames feed the visual update.
+  const std::string live_source = "{device: {camera_id: \"\"}}";
+  std::string replayed = camera;
+  replayed.replace(replayed.find(live_source), live_source.size(), "{replay: {file: mav0/cam0}}");
+  EXPECT_TRUE(not_implemented(replayed).empty());
+  // The visual update takes one camera: a second enabled one is refused.
+  std::string two_cameras = replayed;
+  two_cameras += replayed.substr(replayed.find("  - name: cam\n"));
+  two_cameras.replace(two_cameras.rfind("name: cam"), 9, "name: cam2");
+  EXPECT_EQ(not_implemented(two_cameras), std::vector<std::string>{"sensors[2].enabled"});
+  // estimator.vio.enabled false: the camera is left out, with a warning that says so.
+  const ConfigResult no_vio =
+      load_config_from_string(replayed + "estimator: {vio: {enabled: false}}\n", "test.yaml");
+  bool warned = false;
+  for (const auto& p : no_vio.problems) {
+    EXPECT_NE(p.kind, ProblemKind::not_implemented) << p.message;
+    if (p.severity == Severity::warning && p.path == "sensors[1].enabled" &&
+        p.message.find("estimator.vio.enabled is false") != std::string::npos) {
+      warned = true;
+    }
+  }
+  EXPECT_TRUE(warned);
 
   const std::string two_lidars = std::string(kLidar) + R"(  - name: vlp
     driver: velodyne

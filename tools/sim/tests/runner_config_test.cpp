@@ -77,6 +77,8 @@ void check_config(const Scenario& scenario) {
     const auto* s = config.find_sensor(cam.name);
     ASSERT_NE(s, nullptr) << cam.name;
     const auto& k = cam.params.intrinsics;
+    // Written without images: the camera is there, disabled, so the folder replays as LIO.
+    EXPECT_FALSE(s->enabled);
     EXPECT_EQ(s->camera.width, k.width);
     EXPECT_EQ(s->camera.height, k.height);
     EXPECT_DOUBLE_EQ(s->camera.intrinsics[0], k.fx);
