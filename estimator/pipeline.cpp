@@ -80,10 +80,11 @@ void LioPipeline::add_imu(const ImuSample& sample) {
     belief_ = *initializer_.result();
     state_time_ = initializer_.time();
     sync_.start(state_time_);
-    // The scans that end after the initialisation are the filter's first, whichever arrived
+    init_time_ = state_time_;
+    // The scans that begin after the initialisation are the filter's first, whichever arrived
     // first: replay (time order) and live (arrival order) start from the same scan.
     for (LidarScan& scan : early_scans_) {
-      if (MeasurementSync::scan_end(scan) <= state_time_) {
+      if (scan.start.mapped < init_time_) {
         ++counters_.scans_before_init;
         continue;
       }
@@ -96,6 +97,13 @@ void LioPipeline::add_imu(const ImuSample& sample) {
 
 void LioPipeline::add_scan(LidarScan scan) {
   if (initializer_.done()) {
+    // A scan that began before the initialisation ended has points the filter holds no state
+    // for: dropped whichever way it arrived, so live and replay start from the same scan.
+    if (!scan.empty() && scan.start.mapped < init_time_) {
+      ++init_counters_.scans_in;
+      ++counters_.scans_before_init;
+      return;
+    }
     sync_.add_scan(std::move(scan));
     return;
   }

@@ -188,6 +188,7 @@ class LioPipeline {
   // whether they precede the initialisation is only known once it ends (live, the LiDAR and the
   // IMU arrive through different sockets, so arrival order is not time order).
   std::deque<LidarScan> early_scans_;
+  MappedTime init_time_;  // when the initialisation ended: scans must begin after it
   ImuPoseTrack track_;
   std::vector<std::uint32_t> indices_;
   std::vector<std::uint32_t> ring_counts_;  // valid points seen per ring (point_filter_num)

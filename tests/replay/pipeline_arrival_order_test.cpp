@@ -105,7 +105,7 @@ TEST(PipelineArrivalOrder, ScansArrivingBeforeTheirImuStartTheFilterWhereTimeOrd
   const std::vector<Measurement> in_time_order = simulate_avia(2.0);
   const PipelineRun reference = run(in_time_order);
   ASSERT_GE(reference.outputs.size(), 15U);
-  // Scans ending before the initialisation are dropped; the one it ends in is the filter's first.
+  // Scans that begin before the initialisation ends are dropped, the one it ends in included.
   EXPECT_GE(reference.counters.scans_before_init, 1U);
 
   for (const std::int64_t early_ms : {5, 20, 60}) {
