@@ -8,7 +8,7 @@
 #   bench/daemon_bench.sh latency [BUILD_DIR]   OS1-64 street (40 s) at the recorded pace: pose and
 #                                               IMU-rate pose latency p50/p99, frame time, losses
 #   bench/daemon_bench.sh rate [BUILD_DIR]      OS1-128 street sent at twice its line rate for 60 s
-#                                               (a 30 s capture at speed 2, twice): packet losses
+#                                               (a 30 s capture at speed 2, four times): packet losses
 #   bench/daemon_bench.sh memory [BUILD_DIR]    Mid-360 room for MINUTES (default 30) at the recorded
 #                                               pace: the daemon's RSS every minute (needs ~200 MB
 #                                               of $TMPDIR per minute for the capture)
@@ -88,7 +88,7 @@ case "$mode" in
     prepare street_vehicle_os1_128 30 "{lio: {point_filter_num: 4, filter_size_surf: 0.5}}"
     sim="$work/street_vehicle_os1_128"
     start_daemon "$sim/live.yaml"
-    "$sender" "$sim/os1.pcap" --speed 2 --repeat 2
+    "$sender" "$sim/os1.pcap" --speed 2 --repeat 4
     stop_daemon
     grep -E 'udp: kernel drops|stopped by' "$sim/live.yaml.log"
     ;;
