@@ -175,13 +175,8 @@ int run_realtime(const LivodConfig& config, const ReplayArgs& args) {
 }
 
 int run(const ReplayArgs& args) {
-  ConfigResult loaded = load_config(args.config);
-  if (loaded.ok()) {
-    // The same file checks as check-config; the recordings are opened by the replay itself.
-    for (auto& p : check_config_files(loaded.config, /*open_recordings=*/false)) {
-      loaded.problems.push_back(std::move(p));
-    }
-  }
+  // The same file checks as check-config (recordings are opened by the run itself).
+  ConfigResult loaded = load_checked_config(args.config, /*open_recordings=*/false);
   for (const auto& problem : loaded.problems) {
     fmt::print(stderr, "{}\n", format_problem(loaded.source, problem));
   }
