@@ -189,9 +189,19 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
 
   const int threads = options.threads >= 0 ? options.threads : config.estimator.threads;
   WorkerPool pool(threads > 0 ? threads : WorkerPool::hardware_threads());
+  std::optional<int> priority;
+  if (config.realtime.scheduler_priority > 0) priority = config.realtime.scheduler_priority;
+  std::optional<int> cpu;
+  if (config.realtime.scheduler_cpu >= 0) cpu = config.realtime.scheduler_cpu;
   SchedulerOptions so;
   so.max_groups_per_step = 1;
   so.max_queued_scans = options.max_queued_scans;
+  // The filter update runs on its own thread so that this thread keeps publishing IMU-rate poses
+  // during a scan update (update_thread.hpp); it takes the scheduler's real-time settings.
+  so.update_thread = true;
+  so.update_doorbell = &wake;
+  so.update_thread_options.priority = priority;
+  so.update_thread_options.cpu = cpu;
   Scheduler scheduler(config, std::move(opened.inputs), &pool, outputs, so);
 
   Publisher publisher(channels, options.bus, po);
@@ -200,6 +210,8 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   publisher.watch("publisher", [&publisher] { return publisher.heartbeat().beats(); });
   for (auto& t : source_threads) publisher.watch(t.name, t.beats);
   notifier.watch("scheduler", [&scheduler_beat] { return scheduler_beat.beats(); });
+  publisher.watch("update", [&scheduler] { return scheduler.update_beats(); });
+  notifier.watch("update", [&scheduler] { return scheduler.update_beats(); });
   notifier.watch("publisher", [&publisher] { return publisher.heartbeat().beats(); });
   for (auto& t : source_threads) notifier.watch(t.name, t.beats);
   publisher.start();
@@ -209,10 +221,6 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   std::atomic<bool> scheduler_done{false};
   std::string scheduler_error;
   std::string end_reason;
-  std::optional<int> priority;
-  if (config.realtime.scheduler_priority > 0) priority = config.realtime.scheduler_priority;
-  std::optional<int> cpu;
-  if (config.realtime.scheduler_cpu >= 0) cpu = config.realtime.scheduler_cpu;
 
   std::jthread scheduler_thread([&](const std::stop_token& stop) {
     if (const auto refused = apply_thread_scheduling("livod-sched", priority, cpu);
