@@ -163,6 +163,9 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   po.map_cell_m = options.map_cell_m;
   po.map_max_points = options.map_max_points;
   po.publish_cloud = options.bus != nullptr && lcm.publish_cloud;
+  if (config.realtime.scheduler_priority > 0) {
+    po.priority = std::max(1, config.realtime.scheduler_priority - 1);
+  }
   // systemd: a no-op unless asked for and NOTIFY_SOCKET is set.
   ServiceNotifier notifier =
       options.notify_systemd
@@ -196,11 +199,13 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   SchedulerOptions so;
   so.max_groups_per_step = 1;
   so.max_queued_scans = options.max_queued_scans;
-  // The filter update runs on its own thread so that this thread keeps publishing IMU-rate poses
-  // during a scan update (update_thread.hpp); it takes the scheduler's real-time settings.
+  // The filter update runs on its own thread so that the scheduler thread keeps publishing
+  // IMU-rate poses during a scan update (update_thread.hpp). Under SCHED_FIFO the IMU-rate pose's
+  // path (capture, scheduler, then publisher one below it) preempts the update thread (two
+  // below the scheduler) whenever an IMU packet arrives.
   so.update_thread = true;
   so.update_doorbell = &wake;
-  so.update_thread_options.priority = priority;
+  if (priority) so.update_thread_options.priority = std::max(1, *priority - 2);
   so.update_thread_options.cpu = cpu;
   Scheduler scheduler(config, std::move(opened.inputs), &pool, outputs, so);
 
