@@ -4,10 +4,15 @@
 
 namespace livod::daemon {
 
-WorkerPool::WorkerPool(int threads) {
+WorkerPool::WorkerPool(int threads, const std::function<void()>& on_worker_start) {
   const int workers = std::max(0, threads - 1);
   workers_.reserve(static_cast<std::size_t>(workers));
-  for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { worker_loop(); });
+  for (int i = 0; i < workers; ++i) {
+    workers_.emplace_back([this, on_worker_start] {
+      if (on_worker_start) on_worker_start();
+      worker_loop();
+    });
+  }
 }
 
 WorkerPool::~WorkerPool() {

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -21,7 +22,9 @@ namespace livod::daemon {
 class WorkerPool final : public estimator::TaskRunner {
  public:
   // `threads` counts the caller: 2 starts one worker. <= 1 runs everything on the caller.
-  explicit WorkerPool(int threads);
+  // `on_worker_start` (may be empty) runs first on each worker thread (the daemon gives the
+  // workers the update thread's real-time priority there).
+  explicit WorkerPool(int threads, const std::function<void()>& on_worker_start = {});
   ~WorkerPool() override;
 
   void run(std::size_t count, const std::function<void(std::size_t)>& task) override;

@@ -191,7 +191,19 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   LiveOutputs outputs(channels, lo);
 
   const int threads = options.threads >= 0 ? options.threads : config.estimator.threads;
-  WorkerPool pool(threads > 0 ? threads : WorkerPool::hardware_threads());
+  // The estimator's workers are part of the update: under SCHED_FIFO they take the update
+  // thread's priority (two below the scheduler), else a parallel loop waits for its slowest part
+  // behind every other process on the machine.
+  std::optional<int> worker_priority;
+  if (config.realtime.scheduler_priority > 0) {
+    worker_priority = std::max(1, config.realtime.scheduler_priority - 2);
+  }
+  WorkerPool pool(threads > 0 ? threads : WorkerPool::hardware_threads(), [worker_priority] {
+    if (const auto refused = apply_thread_scheduling("livod-worker", worker_priority, {});
+        !refused.empty()) {
+      spdlog::warn("estimator worker thread: {}", refused);
+    }
+  });
   std::optional<int> priority;
   if (config.realtime.scheduler_priority > 0) priority = config.realtime.scheduler_priority;
   std::optional<int> cpu;
