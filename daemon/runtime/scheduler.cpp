@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/image.hpp"
+#include "estimator/lidars.hpp"
 
 namespace livod::daemon::runtime {
 namespace {
@@ -34,7 +35,7 @@ std::string unused_reason(const LivodConfig& config, const SensorConfig& s) {
                ? "the visual update uses one camera, the first enabled one"
                : "estimator.vio.enabled is false (LiDAR-inertial odometry only)";
   }
-  return "the estimator takes the body IMU and one LiDAR";
+  return "the estimator takes one IMU, the body IMU";
 }
 
 }  // namespace
@@ -59,6 +60,22 @@ SensorRoles assign_roles(const LivodConfig& config) {
   if (roles.lidar < 0)
     throw Error("the configuration has no enabled LiDAR: the estimator needs one");
   roles.T_imu_lidar = config.sensors[static_cast<std::size_t>(roles.lidar)].T_body_sensor;
+  // The reference LiDAR first, then every other enabled LiDAR in configuration order.
+  roles.lidars.push_back(roles.lidar);
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const auto& s = config.sensors[i];
+    if (static_cast<int>(i) != roles.lidar && s.enabled &&
+        sensor_kind(s.driver) == SensorKind::lidar) {
+      roles.lidars.push_back(static_cast<int>(i));
+    }
+  }
+  for (const int l : roles.lidars) {
+    roles.T_imu_lidars.push_back(config.sensors[static_cast<std::size_t>(l)].T_body_sensor);
+  }
+  if (roles.lidars.size() > estimator::kMaxLidars) {
+    throw Error(std::to_string(roles.lidars.size()) + " LiDARs are enabled: the estimator fuses " +
+                "at most " + std::to_string(estimator::kMaxLidars));
+  }
   if (config.estimator.vio.enabled) {
     for (std::size_t i = 0; i < config.sensors.size(); ++i) {
       const auto& s = config.sensors[i];
@@ -68,10 +85,15 @@ SensorRoles assign_roles(const LivodConfig& config) {
       }
     }
   }
+  if (roles.lidars.size() > 1 && roles.camera >= 0) {
+    throw Error("a camera with estimator.vio.enabled and " + std::to_string(roles.lidars.size()) +
+                " LiDARs: the visual update runs with one LiDAR only");
+  }
   roles.unused_reason.resize(config.sensors.size());
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
     const auto n = static_cast<int>(i);
-    const bool used = n == roles.body_imu || n == roles.lidar || n == roles.camera;
+    const bool used = n == roles.body_imu || n == roles.camera ||
+                      std::find(roles.lidars.begin(), roles.lidars.end(), n) != roles.lidars.end();
     if (!used) roles.unused_reason[i] = unused_reason(config, config.sensors[i]);
   }
   return roles;
@@ -106,6 +128,7 @@ Scheduler::Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
   estimator::PipelineOptions po;
   po.params = config_.estimator;
   po.T_imu_lidar = roles_.T_imu_lidar;
+  po.T_imu_more_lidars.assign(roles_.T_imu_lidars.begin() + 1, roles_.T_imu_lidars.end());
   po.runner = runner;
   po.max_queued_scans = options_.max_queued_scans;
   if (roles_.camera >= 0) {
@@ -122,7 +145,6 @@ Scheduler::~Scheduler() = default;
 
 void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
   const auto body = static_cast<std::size_t>(roles_.body_imu);
-  const auto lidar = static_cast<std::size_t>(roles_.lidar);
   const int camera = roles_.camera;
   std::vector<std::optional<SensorInput>> by_index(config_.sensors.size());
   for (auto& in : inputs) {
@@ -134,7 +156,8 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
   for (std::size_t i = 0; i < config_.sensors.size(); ++i) {
     const SensorConfig& s = config_.sensors[i];
     const bool is_body = i == body;
-    const bool is_lidar = i == lidar;
+    const auto slot = std::find(roles_.lidars.begin(), roles_.lidars.end(), static_cast<int>(i));
+    const bool is_lidar = slot != roles_.lidars.end();
     const bool is_camera = static_cast<int>(i) == camera;
     if (!is_body && !is_lidar && !is_camera) continue;
     if (!by_index[i] || !by_index[i]->source) {
@@ -146,6 +169,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
     r->origin = by_index[i]->origin;
     r->source = std::move(by_index[i]->source);
     r->scans_to_estimator = is_lidar;
+    r->lidar_slot = is_lidar ? static_cast<std::size_t>(slot - roles_.lidars.begin()) : 0;
     r->imu_to_estimator = is_body;
     r->images_to_estimator = is_camera;
     r->imu_usable = sensor_kind(s.driver) == SensorKind::imu || s.imu.enabled;
@@ -177,7 +201,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
       LidarScan copy = scan;
       self->clock->map_scan(copy);
       ++self->scans;
-      pipeline_->add_scan(std::move(copy));
+      pipeline_->add_scan(std::move(copy), self->lidar_slot);
     };
     r->sinks.on_image = [this, self](const ImageFrame& image) {
       if (!self->images_to_estimator) return;

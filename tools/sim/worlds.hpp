@@ -15,6 +15,11 @@ World make_room_world(std::uint64_t seed);
 // geometry constrains everything but the translation along the axis.
 World make_corridor_world();
 
+// The same corridor with doorways in its left wall (+y), one every 8 m from x = 3 (1 m wide),
+// each into a 3 x 3 m room: a LiDAR looking forward sees the doorways at grazing angles only,
+// one looking sideways sees the rooms' side walls, which constrain the translation along x.
+World make_corridor_side_rooms_world();
+
 // An outdoor street along +x of `length` metres (from x = -20): ground, buildings on both sides
 // of a 14 m wide road, street poles every 25 m and trees (trunk + crown).
 World make_street_world(std::uint64_t seed, double length);
