@@ -48,8 +48,7 @@ LioPipeline::LioPipeline(PipelineOptions options)
       map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
       downsampler_(options_.params.lio.filter_size_surf) {
   if (T_imu_lidars_.size() > kMaxLidars) {
-    throw std::invalid_argument("LioPipeline: at most " + std::to_string(kMaxLidars) +
-                                " LiDARs");
+    throw std::invalid_argument("LioPipeline: at most " + std::to_string(kMaxLidars) + " LiDARs");
   }
   if (T_imu_lidars_.size() > 1 && options_.camera && options_.params.vio.enabled) {
     throw std::invalid_argument(
@@ -293,8 +292,7 @@ void LioPipeline::prepare_points(const LidarScan& scan, std::size_t lidar, Mappe
     if (scan.point(i).cast<double>().squaredNorm() < blind2) continue;
     indices_.push_back(i);
   }
-  undistort_points(track_, T_imu_lidars_[lidar], t, scan, indices_, lidar_points_,
-                   options_.runner);
+  undistort_points(track_, T_imu_lidars_[lidar], t, scan, indices_, lidar_points_, options_.runner);
   timings.undistort_ms += ms_since(t0);
 
   // Downsampled in the LiDAR's own frame, so that each point keeps its LiDAR (its ray and noise).
@@ -334,7 +332,8 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   point_lidar_.clear();
   if (several) {
     for (std::size_t l = 0; l < group.scans.size(); ++l) {
-      if (!group.scans[l].empty()) prepare_points(group.scans[l], l, group.t_update, report.timings);
+      if (!group.scans[l].empty())
+        prepare_points(group.scans[l], l, group.t_update, report.timings);
     }
   } else {
     prepare_points(group.scan, 0, group.t_update, report.timings);

@@ -51,8 +51,8 @@ class PointToPlane {
   PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, TaskRunner* runner,
                const PointNoise& noise = {}, bool incidence = false);
   // Several LiDARs: ScanPoint::lidar indexes `T_imu_lidars` (each point in its own LiDAR's frame).
-  PointToPlane(const VoxelMap& map, std::vector<Eigen::Isometry3d> T_imu_lidars,
-               TaskRunner* runner, const PointNoise& noise = {}, bool incidence = false);
+  PointToPlane(const VoxelMap& map, std::vector<Eigen::Isometry3d> T_imu_lidars, TaskRunner* runner,
+               const PointNoise& noise = {}, bool incidence = false);
 
   // Accumulates the normal equations of every matched point at state x.
   bool linearize(const std::vector<ScanPoint>& points, const State& x, NormalEquations& eq,

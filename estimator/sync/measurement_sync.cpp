@@ -260,7 +260,8 @@ bool MeasurementSync::next_of_lidars(MeasurementGroup& group) {
   std::size_t first = lidars_.size();
   for (std::size_t l = 0; l < lidars_.size(); ++l) {
     if (lidars_[l].scans.empty()) continue;
-    if (first == lidars_.size() || lidars_[l].scans.front().end < lidars_[first].scans.front().end) {
+    if (first == lidars_.size() ||
+        lidars_[l].scans.front().end < lidars_[first].scans.front().end) {
       first = l;
     }
   }

@@ -67,7 +67,7 @@ struct MeasurementGroup {
   // Several LiDARs: per LiDAR (by index) its points measured in (previous update, t_update], each
   // scan referenced to its own start; empty with one LiDAR.
   std::vector<LidarScan> scans;
-  std::size_t lidar = 0;          // the LiDAR whose scan ends at t_update
+  std::size_t lidar = 0;            // the LiDAR whose scan ends at t_update
   std::uint32_t scan_sequence = 0;  // that scan's sequence number
   // Samples stamped in (previous update, t_update], in time order.
   std::vector<ImuSample> imu;
@@ -135,8 +135,8 @@ class MeasurementSync {
   // One LiDAR's queue in the several-LiDAR mode.
   struct LidarQueue {
     std::deque<QueuedScan> scans;
-    bool seen = false;  // a scan of this LiDAR has arrived
-    MappedTime reach;   // the end of its newest scan
+    bool seen = false;    // a scan of this LiDAR has arrived
+    MappedTime reach;     // the end of its newest scan
     Nanoseconds span{0};  // the span of its newest scan (its scan period, near enough)
   };
 

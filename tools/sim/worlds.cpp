@@ -115,8 +115,8 @@ World make_corridor_side_rooms_world() {
   const double hx = kLength / 2 + kWall;
   // Floor and ceiling cover the rooms too.
   const double y_far = kHalfWidth + 2 * kWall + kRoomDepth;
-  w.add_box({cx, y_far / 2 - kHalfWidth / 2, -kWall},
-            {hx, (y_far + kHalfWidth) / 2 + kWall, kWall}, 0.0, surface(0.3F, 2.0F, 11));
+  w.add_box({cx, y_far / 2 - kHalfWidth / 2, -kWall}, {hx, (y_far + kHalfWidth) / 2 + kWall, kWall},
+            0.0, surface(0.3F, 2.0F, 11));
   w.add_box({cx, y_far / 2 - kHalfWidth / 2, kHeight + kWall},
             {hx, (y_far + kHalfWidth) / 2 + kWall, kWall}, 0.0, surface(0.6F, 2.0F, 12));
   // The right wall (-y) is uniform, as in the featureless corridor.
