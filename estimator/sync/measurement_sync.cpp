@@ -57,6 +57,7 @@ MappedTime MeasurementSync::scan_end(const LidarScan& scan) {
 
 void MeasurementSync::start(MappedTime t) {
   started_ = true;
+  start_ = t;
   last_update_ = t;
   last_imu_ = t;
   last_image_ = t;
@@ -271,8 +272,11 @@ bool MeasurementSync::next_of_lidars(MeasurementGroup& group) {
   // Every LiDAR's points up to t must have arrived, unless that LiDAR is late.
   const Nanoseconds wait = from_seconds(params_.lidar_wait_s);
   for (const LidarQueue& q : lidars_) {
-    const bool arrived = !q.seen || q.reach >= t;
-    const bool late = imu_reach - q.reach > q.span + wait;
+    const bool arrived = q.seen && q.reach >= t;
+    // A LiDAR without a scan yet is waited for at the start only (its first scan may come a scan
+    // after the others'); one that never sends is late from then on.
+    const bool late = q.seen ? imu_reach - q.reach > q.span + wait
+                             : imu_reach - start_ > from_seconds(kFirstScanWaitS) + wait;
     if (!arrived && !late) return false;
   }
   group.kind = MeasurementGroup::Kind::lidar;

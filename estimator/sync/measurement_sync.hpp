@@ -29,7 +29,8 @@
 // through, and the state never goes back in time however the scans overlap. A group waits until
 // every LiDAR's data have reached its update time, except for a LiDAR that is late: one whose
 // newest scan ended more than its own scan span + lidar_wait_s before the newest IMU sample (a
-// LiDAR that stopped, or one whose scans arrive much later than the others'). Points of such a
+// LiDAR that stopped, or one whose scans arrive much later than the others'); a LiDAR that has not
+// sent a scan yet is waited for during the first 0.2 s + lidar_wait_s only. Points of such a
 // LiDAR that arrive after the filter passed their time are dropped and counted. Image groups are
 // not made with several LiDARs (the configuration check refuses VIO with more than one LiDAR).
 //
@@ -151,6 +152,10 @@ class MeasurementSync {
   SyncParams params_;
   bool started_ = false;
   bool images_enabled_ = false;
+  // Several LiDARs: how long a LiDAR without any scan yet is waited for after the start (a scan
+  // period of the slowest common LiDARs, 5 Hz).
+  static constexpr double kFirstScanWaitS = 0.2;
+  MappedTime start_;        // where the timeline started
   MappedTime last_update_;  // the last group's update time (or the start)
   MappedTime last_imu_;     // the newest accepted sample (or the start)
   MappedTime last_image_;   // the newest accepted image

@@ -447,5 +447,32 @@ TEST(MeasurementSyncLidars, WaitsForTheOtherLidarUnlessItIsLate) {
   EXPECT_EQ(sync.counters().points_late, 50U);
 }
 
+// At the start a LiDAR without a scan yet is waited for (its first scan may come a scan after the
+// others'), for 0.2 s + lidar_wait_s of IMU data at most: one that never sends stalls nothing
+// after.
+TEST(MeasurementSyncLidars, ALidarWithoutScansIsWaitedForAtTheStartOnly) {
+  MeasurementSync sync(SyncParams{.lidars = 2, .lidar_wait_s = 0.05});
+  sync.start(MappedTime(0));
+  for (std::int64_t t = 5; t <= 150; t += 5) sync.add_imu(imu_at(t * kMs));
+  sync.add_scan(dense_scan(0, 1, 99, 0), 0);  // A: [1, 100]
+  MeasurementGroup g;
+  EXPECT_FALSE(sync.next(g));                  // B may still send its first scan
+  sync.add_scan(dense_scan(1, 31, 99, 0), 1);  // B: [31, 130] reaches past 100
+  ASSERT_TRUE(sync.next(g));
+  EXPECT_EQ(g.t_update.ns, 100 * kMs);
+  EXPECT_EQ(g.scans[1].size(), 70U);  // B's points 31 .. 100: none late
+  EXPECT_EQ(sync.counters().points_late, 0U);
+
+  MeasurementSync lone(SyncParams{.lidars = 2, .lidar_wait_s = 0.05});
+  lone.start(MappedTime(0));
+  for (std::int64_t t = 5; t <= 250; t += 5) lone.add_imu(imu_at(t * kMs));
+  lone.add_scan(dense_scan(0, 1, 99, 0), 0);
+  EXPECT_FALSE(lone.next(g));       // IMU 250 ms: within 0.2 s + 50 ms of the start
+  lone.add_imu(imu_at(255 * kMs));  // past it: B is late, A goes on alone
+  ASSERT_TRUE(lone.next(g));
+  EXPECT_EQ(g.t_update.ns, 100 * kMs);
+  EXPECT_TRUE(g.scans[1].empty());
+}
+
 }  // namespace
 }  // namespace livod::estimator
