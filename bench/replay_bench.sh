@@ -2,8 +2,8 @@
 # End-to-end replay benchmarks (results in docs/replay.md): simulate a scenario with `livod sim`,
 # replay it with `livod replay`, print the timing report's figures.
 #
-#   bench/replay_bench.sh timing [BUILD_DIR]   per-frame time of each rig, 36-40 s each, REPEAT
-#                                              (default 5) replays per rig
+#   bench/replay_bench.sh timing [BUILD_DIR]   per-frame time of each rig (one- and two-LiDAR),
+#                                              36-40 s each, REPEAT (default 5) replays per rig
 #   bench/replay_bench.sh memory [BUILD_DIR]   15 min of the Mid-360 room: RSS and map bytes over
 #                                              time (needs ~3 GB in $TMPDIR for the capture)
 #
@@ -63,6 +63,10 @@ case "$mode" in
     run street_vehicle_vlp16 36 "{lio: {beam_err_deg: 0.1, filter_size_surf: 0.2}}"
     run room_handheld_mid360 40 ""
     run room_handheld_avia 40 ""
+    # Several LiDARs (docs/estimator.md "Several LiDARs"): every scan end of either LiDAR is a
+    # frame, so frames come at twice the rate with about half the points each.
+    run room_dual_mid360 40 ""
+    run street_vehicle_vlp16_avia 36 "{lio: {beam_err_deg: 0.1, filter_size_surf: 0.2}}"
     ;;
   memory)
     repeat=1

@@ -1,6 +1,8 @@
 #include "estimator/pipeline.hpp"
 
 #include <chrono>
+#include <stdexcept>
+#include <string>
 
 #include "core/so3.hpp"
 #include "estimator/imu/propagation.hpp"
@@ -28,16 +30,31 @@ PointNoise point_noise(const LioParams& lio) {
   return n;
 }
 
+std::vector<Eigen::Isometry3d> all_lidars(const PipelineOptions& o) {
+  std::vector<Eigen::Isometry3d> all{o.T_imu_lidar};
+  all.insert(all.end(), o.T_imu_more_lidars.begin(), o.T_imu_more_lidars.end());
+  return all;
+}
+
 }  // namespace
 
 LioPipeline::LioPipeline(PipelineOptions options)
     : options_(std::move(options)),
+      T_imu_lidars_(all_lidars(options_)),
       initializer_(options_.params.imu),
       sync_(SyncParams{options_.max_queued_scans, options_.max_queued_imu, 8,
-                       options_.params.vio.image_timeout_s}),
+                       options_.params.vio.image_timeout_s, T_imu_lidars_.size(),
+                       options_.lidar_wait_s}),
       map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
       downsampler_(options_.params.lio.filter_size_surf) {
-  p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.runner,
+  if (T_imu_lidars_.size() > kMaxLidars) {
+    throw std::invalid_argument("LioPipeline: at most " + std::to_string(kMaxLidars) + " LiDARs");
+  }
+  if (T_imu_lidars_.size() > 1 && options_.camera && options_.params.vio.enabled) {
+    throw std::invalid_argument(
+        "LioPipeline: the visual update runs with one LiDAR only (several LiDARs: LIO)");
+  }
+  p2p_ = std::make_unique<PointToPlane>(*map_, T_imu_lidars_, options_.runner,
                                         point_noise(options_.params.lio),
                                         options_.params.lio.incidence_term);
   if (options_.camera && options_.params.vio.enabled) {
@@ -72,7 +89,7 @@ void LioPipeline::add_imu(const ImuSample& sample) {
   have_prev_imu_ = true;
   // The initialisation ends at this sample or a later one: scans ending by now precede it.
   while (!early_scans_.empty() &&
-         MeasurementSync::scan_end(early_scans_.front()) <= sample.stamp.mapped) {
+         MeasurementSync::scan_end(early_scans_.front().scan) <= sample.stamp.mapped) {
     early_scans_.pop_front();
     ++counters_.scans_before_init;
   }
@@ -83,19 +100,20 @@ void LioPipeline::add_imu(const ImuSample& sample) {
     init_time_ = state_time_;
     // The scans that begin after the initialisation are the filter's first, whichever arrived
     // first: replay (time order) and live (arrival order) start from the same scan.
-    for (LidarScan& scan : early_scans_) {
-      if (scan.start.mapped < init_time_) {
+    for (EarlyScan& early : early_scans_) {
+      if (early.scan.start.mapped < init_time_) {
         ++counters_.scans_before_init;
         continue;
       }
       --init_counters_.scans_in;  // the sync counts it again
-      sync_.add_scan(std::move(scan));
+      sync_.add_scan(std::move(early.scan), early.lidar);
     }
     early_scans_.clear();
   }
 }
 
-void LioPipeline::add_scan(LidarScan scan) {
+void LioPipeline::add_scan(LidarScan scan, std::size_t lidar) {
+  if (lidar >= T_imu_lidars_.size()) return;
   if (initializer_.done()) {
     // A scan that began before the initialisation ended has points the filter holds no state
     // for: dropped whichever way it arrived, so live and replay start from the same scan.
@@ -104,7 +122,7 @@ void LioPipeline::add_scan(LidarScan scan) {
       ++counters_.scans_before_init;
       return;
     }
-    sync_.add_scan(std::move(scan));
+    sync_.add_scan(std::move(scan), lidar);
     return;
   }
   ++init_counters_.scans_in;
@@ -113,7 +131,7 @@ void LioPipeline::add_scan(LidarScan scan) {
     ++counters_.scans_before_init;
     return;
   }
-  early_scans_.push_back(std::move(scan));
+  early_scans_.push_back(EarlyScan{std::move(scan), lidar});
   if (early_scans_.size() > options_.max_queued_scans) {
     early_scans_.pop_front();
     ++counters_.scans_before_init;
@@ -147,6 +165,8 @@ PipelineCounters LioPipeline::counters() const {
   c.scans_in = init_counters_.scans_in + s.scans_in;
   c.scans_out_of_order = s.scans_out_of_order;
   c.scans_queue_overflow = s.scans_queue_overflow;
+  c.scans_late = s.scans_late;
+  c.points_late = s.points_late;
   c.imu_in = init_counters_.imu_in + s.imu_in;
   c.imu_out_of_order = init_counters_.imu_out_of_order + s.imu_out_of_order;
   c.imu_queue_overflow = s.imu_queue_overflow;
@@ -259,27 +279,15 @@ void LioPipeline::visual_update(const MeasurementGroup& group, bool lio_matched,
   }
 }
 
-void LioPipeline::process_group(const MeasurementGroup& group,
-                                const std::function<void(const PipelineOutput&)>& on_output) {
-  const auto t_total = std::chrono::steady_clock::now();
+void LioPipeline::prepare_points(const LidarScan& scan, std::size_t lidar, MappedTime t,
+                                 FrameTimings& timings) {
   const auto& lio = options_.params.lio;
-  FrameReport report;
-  const LidarScan& scan = group.scan;
-  report.kind = group.kind;
-  report.t = group.t_update;
-  report.scan_sequence = scan.sequence;
-  report.raw_points = static_cast<int>(scan.size());
-
-  auto t0 = std::chrono::steady_clock::now();
-  propagate_to(group, track_);
-  report.timings.propagate_ms = ms_since(t0);
-
   // Select points: valid, beyond the blind range, every point_filter_num-th of each ring. The
   // stride counts per ring because scans interleave their rings (Velodyne firings, Ouster
   // columns, Livox lines): every n-th point of the scan would keep only the rings whose index
   // shares n's factors - half of an HDL-32E's fan at n = 2, one Mid-360 line in four at n = 4 -
   // and the lost geometry showed as drift on long drives.
-  t0 = std::chrono::steady_clock::now();
+  auto t0 = std::chrono::steady_clock::now();
   indices_.clear();
   const double blind2 = lio.blind * lio.blind;
   const auto stride = static_cast<std::uint32_t>(std::max(1, lio.point_filter_num));
@@ -292,14 +300,52 @@ void LioPipeline::process_group(const MeasurementGroup& group,
     if (scan.point(i).cast<double>().squaredNorm() < blind2) continue;
     indices_.push_back(i);
   }
-  undistort_points(track_, options_.T_imu_lidar, group.t_update, scan, indices_, undistorted_,
-                   options_.runner);
-  report.timings.undistort_ms = ms_since(t0);
+  undistort_points(track_, T_imu_lidars_[lidar], t, scan, indices_, lidar_points_, options_.runner);
+  timings.undistort_ms += ms_since(t0);
 
+  // Downsampled in the LiDAR's own frame, so that each point keeps its LiDAR (its ray and noise).
   t0 = std::chrono::steady_clock::now();
-  downsampler_.apply(undistorted_);
-  spatial_order_.apply(undistorted_, lio.voxel_size);
-  report.timings.downsample_ms = ms_since(t0);
+  downsampler_.apply(lidar_points_);
+  spatial_order_.apply(lidar_points_, lio.voxel_size);
+  if (undistorted_.empty()) {
+    undistorted_.swap(lidar_points_);
+  } else {
+    undistorted_.insert(undistorted_.end(), lidar_points_.begin(), lidar_points_.end());
+  }
+  point_lidar_.resize(undistorted_.size(), static_cast<std::uint32_t>(lidar));
+  timings.downsample_ms += ms_since(t0);
+}
+
+void LioPipeline::process_group(const MeasurementGroup& group,
+                                const std::function<void(const PipelineOutput&)>& on_output) {
+  const auto t_total = std::chrono::steady_clock::now();
+  const auto& lio = options_.params.lio;
+  FrameReport report;
+  const bool several = !group.scans.empty();  // several LiDARs: group.scans, one per LiDAR
+  report.kind = group.kind;
+  report.t = group.t_update;
+  report.scan_sequence = several ? group.scan_sequence : group.scan.sequence;
+  report.lidar = several ? static_cast<int>(group.lidar) : 0;
+  if (several) {
+    for (const LidarScan& scan : group.scans) report.raw_points += static_cast<int>(scan.size());
+  } else {
+    report.raw_points = static_cast<int>(group.scan.size());
+  }
+
+  auto t0 = std::chrono::steady_clock::now();
+  propagate_to(group, track_);
+  report.timings.propagate_ms = ms_since(t0);
+
+  undistorted_.clear();
+  point_lidar_.clear();
+  if (several) {
+    for (std::size_t l = 0; l < group.scans.size(); ++l) {
+      if (!group.scans[l].empty())
+        prepare_points(group.scans[l], l, group.t_update, report.timings);
+    }
+  } else {
+    prepare_points(group.scan, 0, group.t_update, report.timings);
+  }
   report.used_points = static_cast<int>(undistorted_.size());
 
   // Residuals: the points' covariances, then association and residual rows at every iteration;
@@ -311,6 +357,7 @@ void LioPipeline::process_group(const MeasurementGroup& group,
     for (std::size_t i = begin; i < end; ++i) {
       scan_points_[i].p_lidar = undistorted_[i];
       scan_points_[i].cov_lidar = point_covariance(undistorted_[i], noise);
+      scan_points_[i].lidar = point_lidar_[i];
     }
   });
 
@@ -343,7 +390,8 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   // Map insertion with world covariances (point + pose uncertainty, FAST-LIVO2 1.3).
   t0 = std::chrono::steady_clock::now();
   const Eigen::Matrix3d R = belief_.x.R_world_imu;
-  const Eigen::Matrix3d R_wl = R * options_.T_imu_lidar.linear();
+  Eigen::Matrix3d R_wl[kMaxLidars];
+  for (std::size_t l = 0; l < T_imu_lidars_.size(); ++l) R_wl[l] = R * T_imu_lidars_[l].linear();
   const Eigen::Matrix3d P_rot = belief_.P.block<3, 3>(kRot, kRot);
   const Eigen::Matrix3d P_pos = belief_.P.block<3, 3>(kPos, kPos);
   const bool incidence = lio.incidence_term;
@@ -353,16 +401,17 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   for_points(scan_points_.size(), [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const Eigen::Vector3d& p_l = scan_points_[i].p_lidar;
-      const Eigen::Vector3d p_i = options_.T_imu_lidar * p_l;
+      const std::uint32_t l = scan_points_[i].lidar;
+      const Eigen::Vector3d p_i = T_imu_lidars_[l] * p_l;
       const Eigen::Matrix3d J_rot = -R * so3::hat(p_i);
       // A point that matched a plane knows its surface: its covariance gets the incidence term.
       const Eigen::Matrix3d cov_l =
           incidence && matched && !(*normals)[i].isZero()
-              ? point_covariance(p_l, noise, Eigen::Vector3d(R_wl.transpose() * (*normals)[i]))
+              ? point_covariance(p_l, noise, Eigen::Vector3d(R_wl[l].transpose() * (*normals)[i]))
               : scan_points_[i].cov_lidar;
       world_points_[i].p = R * p_i + belief_.x.p_world_imu;
       world_points_[i].cov =
-          R_wl * cov_l * R_wl.transpose() + J_rot * P_rot * J_rot.transpose() + P_pos;
+          R_wl[l] * cov_l * R_wl[l].transpose() + J_rot * P_rot * J_rot.transpose() + P_pos;
     }
   });
   map_->insert(world_points_, options_.runner);

@@ -7,6 +7,11 @@
 // every group is a scan and this is the LIO of before, unchanged. Inputs carry mapped times
 // (every per-sensor offset already applied once, by the clock domain); outputs are stamped with
 // measurement time (the scan end or the image's mid-exposure), never wall-clock time.
+//
+// Several LiDARs (PipelineOptions::T_imu_more_lidars): every scan end of any LiDAR is an update,
+// with the points of every LiDAR measured since the last update (sync/measurement_sync.hpp), each
+// undistorted and downsampled in its own LiDAR's frame with its own extrinsic, then one iterated
+// update over all of them (docs/estimator.md "Several LiDARs"). LIO only: no camera then.
 
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -35,7 +40,11 @@ namespace livod::estimator {
 
 struct PipelineOptions {
   EstimatorParams params;
-  Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();  // LiDAR 0's (the reference)
+  // Further LiDARs: LiDAR i >= 1 (add_scan's `lidar`) is at T_imu_more_lidars[i - 1]. At most
+  // kMaxLidars in all; with any, `camera` must be unset or VIO disabled (the constructor throws).
+  std::vector<Eigen::Isometry3d> T_imu_more_lidars;
+  double lidar_wait_s = 0.05;  // SyncParams::lidar_wait_s
   // Runs residual rows, point covariances and map refits in parallel (the daemon's worker pool);
   // nullptr: everything on the caller's thread. Results are the same either way. Must outlive the
   // pipeline.
@@ -65,6 +74,7 @@ struct FrameReport {
   MeasurementGroup::Kind kind = MeasurementGroup::Kind::lidar;
   MappedTime t;
   std::uint32_t scan_sequence = 0;
+  int lidar = 0;  // the LiDAR whose scan end is t (several LiDARs; 0 otherwise)
   int raw_points = 0;
   int used_points = 0;  // after blind/point_filter_num and downsampling
   int matched = 0;
@@ -86,7 +96,8 @@ struct PipelineOutput {
   // world frame with their world covariances (pose uncertainty included). Valid during the
   // output callback only.
   std::span<const CovPoint> registered_world;
-  // The LiDAR's pose at t (after both updates in an image group): T_world_imu * T_imu_lidar.
+  // The (reference) LiDAR's pose at t (after both updates in an image group):
+  // T_world_imu * T_imu_lidar.
   Eigen::Isometry3d T_world_lidar = Eigen::Isometry3d::Identity();
   // Image groups with PipelineOptions::colorize: the same points (in registered_world's order)
   // placed with the pose after the visual update, their colours (0x00RRGGBB) sampled from the
@@ -106,6 +117,8 @@ struct PipelineCounters {
   std::uint64_t scans_before_init = 0;  // dropped while IMU initialisation was pending
   std::uint64_t scans_out_of_order = 0;
   std::uint64_t scans_queue_overflow = 0;
+  std::uint64_t scans_late = 0;   // several LiDARs: a LiDAR's scan that ended before the filter
+  std::uint64_t points_late = 0;  // ... and points of partly late scans (SyncCounters)
   std::uint64_t imu_in = 0;
   std::uint64_t imu_out_of_order = 0;
   std::uint64_t imu_queue_overflow = 0;
@@ -126,8 +139,10 @@ class LioPipeline {
   ~LioPipeline();
 
   void add_imu(const ImuSample& sample);
-  // Taken by value (it is queued): move a scan in when the caller is done with it.
-  void add_scan(LidarScan scan);
+  // Taken by value (it is queued): move a scan in when the caller is done with it. `lidar`: which
+  // LiDAR (0: T_imu_lidar; i >= 1: T_imu_more_lidars[i - 1]); other indices are ignored.
+  void add_scan(LidarScan scan, std::size_t lidar = 0);
+  [[nodiscard]] std::size_t lidars() const { return T_imu_lidars_.size(); }
   // An image stamped with its mid_exposure (core/image.hpp). The pipeline keeps a reference to
   // the pixels until the image is processed: the producer must not write into them afterwards.
   // Ignored (counted) without a camera or with VIO disabled.
@@ -155,7 +170,8 @@ class LioPipeline {
   [[nodiscard]] const VoxelMap& map() const { return *map_; }
   [[nodiscard]] const Belief& belief() const { return belief_; }
   // The points of the scan processed last, as the update used them: undistorted to the scan end
-  // and downsampled, in the LiDAR frame. Valid until the next process() (map export in replay).
+  // and downsampled, in the LiDAR frame (several LiDARs: each in its own LiDAR's frame, in LiDAR
+  // order). Valid until the next process() (map export in replay).
   [[nodiscard]] const std::vector<Eigen::Vector3d>& last_scan_points() const {
     return undistorted_;
   }
@@ -170,10 +186,15 @@ class LioPipeline {
   void propagate_to(const MeasurementGroup& group, ImuPoseTrack& track);
   // The visual update of an image group, after the LIO update and map insertion.
   void visual_update(const MeasurementGroup& group, bool lio_matched, FrameReport& report);
+  // Selects, undistorts (to t) and downsamples one LiDAR's points, appending them to
+  // undistorted_ and point_lidar_.
+  void prepare_points(const LidarScan& scan, std::size_t lidar, MappedTime t,
+                      FrameTimings& timings);
   // fn(begin, end) over [0, n), on the runner when there is one.
   void for_points(std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn) const;
 
   PipelineOptions options_;
+  std::vector<Eigen::Isometry3d> T_imu_lidars_;  // every LiDAR's, by index
   ImuInitializer initializer_;
   MeasurementSync sync_;
   MeasurementGroup group_;  // the group being processed (its IMU vector keeps its capacity)
@@ -194,12 +215,18 @@ class LioPipeline {
   // Scans that arrived while the initialisation was pending and end after every IMU sample seen:
   // whether they precede the initialisation is only known once it ends (live, the LiDAR and the
   // IMU arrive through different sockets, so arrival order is not time order).
-  std::deque<LidarScan> early_scans_;
+  struct EarlyScan {
+    LidarScan scan;
+    std::size_t lidar = 0;
+  };
+  std::deque<EarlyScan> early_scans_;
   MappedTime init_time_;  // when the initialisation ended: scans must begin after it
   ImuPoseTrack track_;
   std::vector<std::uint32_t> indices_;
   std::vector<std::uint32_t> ring_counts_;  // valid points seen per ring (point_filter_num)
   std::vector<Eigen::Vector3d> undistorted_;
+  std::vector<Eigen::Vector3d> lidar_points_;  // one LiDAR's, before joining undistorted_
+  std::vector<std::uint32_t> point_lidar_;     // per point of undistorted_: its LiDAR
   std::vector<ScanPoint> scan_points_;
   std::vector<CovPoint> world_points_;
   static constexpr std::uint64_t kMapStatsPeriod = 10;

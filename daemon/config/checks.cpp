@@ -7,6 +7,7 @@
 
 #include "daemon/config/readers.hpp"
 #include "daemon/config/sensor_models.hpp"
+#include "estimator/lidars.hpp"
 
 namespace livod::daemon::config_detail {
 
@@ -371,7 +372,16 @@ void check_camera_sizes(ProblemList& problems, const LivodConfig& config,
 void check_implemented(ProblemList& problems, const LivodConfig& config,
                        const std::vector<SensorSite>& sites) {
   int first_lidar = -1;
+  std::size_t enabled_lidars = 0;
   int first_camera = -1;
+  // The visual update runs when VIO is enabled and a camera is.
+  bool visual_update = false;
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const SensorConfig& s = config.sensors[i];
+    if (sites[i].driver_known && s.enabled && sensor_kind(s.driver) == SensorKind::camera) {
+      visual_update = config.estimator.vio.enabled;
+    }
+  }
   for (std::size_t i = 0; i < sites.size(); ++i) {
     const SensorConfig& s = config.sensors[i];
     if (!sites[i].driver_known || !s.enabled) continue;
@@ -395,13 +405,23 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
         }
         break;
       case SensorKind::lidar:
-        if (first_lidar >= 0) {
+        // Every enabled LiDAR feeds the estimator (docs/estimator.md "Several LiDARs"), up to
+        // estimator::kMaxLidars, and LiDAR-inertial only: the visual update takes one LiDAR's scan.
+        ++enabled_lidars;
+        if (first_lidar < 0) {
+          first_lidar = static_cast<int>(i);
+        } else if (enabled_lidars > estimator::kMaxLidars) {
+          problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
+                         where + " is LiDAR number " + std::to_string(enabled_lidars) +
+                             ": the estimator fuses at most " +
+                             std::to_string(estimator::kMaxLidars) + " LiDARs: disable one");
+        } else if (visual_update) {
           problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
                          where + " and " +
                              sensor_label(sites, config, static_cast<std::size_t>(first_lidar)) +
-                             " are both enabled, but the estimator fuses one LiDAR: disable one");
-        } else {
-          first_lidar = static_cast<int>(i);
+                             " are both enabled with a camera and estimator.vio.enabled: the " +
+                             "visual update runs with one LiDAR only (disable one LiDAR, or set " +
+                             "estimator.vio.enabled: false to fuse both LiDAR-inertially)");
         }
         break;
       case SensorKind::imu:

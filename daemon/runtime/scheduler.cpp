@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/image.hpp"
+#include "estimator/lidars.hpp"
 
 namespace livod::daemon::runtime {
 namespace {
@@ -38,7 +39,7 @@ std::string unused_reason(const LivodConfig& config, const SensorConfig& s) {
                ? "the visual update uses one camera, the first enabled one"
                : "estimator.vio.enabled is false (LiDAR-inertial odometry only)";
   }
-  return "the estimator takes the body IMU and one LiDAR";
+  return "the estimator takes one IMU, the body IMU";
 }
 
 }  // namespace
@@ -63,6 +64,22 @@ SensorRoles assign_roles(const LivodConfig& config) {
   if (roles.lidar < 0)
     throw Error("the configuration has no enabled LiDAR: the estimator needs one");
   roles.T_imu_lidar = config.sensors[static_cast<std::size_t>(roles.lidar)].T_body_sensor;
+  // The reference LiDAR first, then every other enabled LiDAR in configuration order.
+  roles.lidars.push_back(roles.lidar);
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const auto& s = config.sensors[i];
+    if (static_cast<int>(i) != roles.lidar && s.enabled &&
+        sensor_kind(s.driver) == SensorKind::lidar) {
+      roles.lidars.push_back(static_cast<int>(i));
+    }
+  }
+  for (const int l : roles.lidars) {
+    roles.T_imu_lidars.push_back(config.sensors[static_cast<std::size_t>(l)].T_body_sensor);
+  }
+  if (roles.lidars.size() > estimator::kMaxLidars) {
+    throw Error(std::to_string(roles.lidars.size()) + " LiDARs are enabled: the estimator fuses " +
+                "at most " + std::to_string(estimator::kMaxLidars));
+  }
   if (config.estimator.vio.enabled) {
     for (std::size_t i = 0; i < config.sensors.size(); ++i) {
       const auto& s = config.sensors[i];
@@ -72,10 +89,15 @@ SensorRoles assign_roles(const LivodConfig& config) {
       }
     }
   }
+  if (roles.lidars.size() > 1 && roles.camera >= 0) {
+    throw Error("a camera with estimator.vio.enabled and " + std::to_string(roles.lidars.size()) +
+                " LiDARs: the visual update runs with one LiDAR only");
+  }
   roles.unused_reason.resize(config.sensors.size());
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
     const auto n = static_cast<int>(i);
-    const bool used = n == roles.body_imu || n == roles.lidar || n == roles.camera;
+    const bool used = n == roles.body_imu || n == roles.camera ||
+                      std::find(roles.lidars.begin(), roles.lidars.end(), n) != roles.lidars.end();
     if (!used) roles.unused_reason[i] = unused_reason(config, config.sensors[i]);
   }
   return roles;
@@ -110,6 +132,7 @@ Scheduler::Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
   estimator::PipelineOptions po;
   po.params = config_.estimator;
   po.T_imu_lidar = roles_.T_imu_lidar;
+  po.T_imu_more_lidars.assign(roles_.T_imu_lidars.begin() + 1, roles_.T_imu_lidars.end());
   po.runner = runner;
   po.max_queued_scans = options_.max_queued_scans;
   if (roles_.camera >= 0) {
@@ -121,7 +144,7 @@ Scheduler::Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
   want_imu_poses_ = sink_.wants_imu_poses();
   build_sensors(std::move(inputs));
   if (options_.update_thread) {
-    held_.reserve(kHeldImuMax + options_.max_queued_scans + 8);
+    held_.reserve(kHeldImuMax + options_.max_queued_scans * roles_.lidars.size() + 8);
     update_thread_ = std::make_unique<UpdateThread>(
         [this] { run_update(); }, options_.update_doorbell, options_.update_thread_options);
   }
@@ -150,20 +173,19 @@ void Scheduler::to_estimator(const ImuSample& m) {
   ++held_imu_;
 }
 
-void Scheduler::to_estimator(LidarScan scan) {
+void Scheduler::to_estimator(LidarScan scan, std::size_t lidar) {
   if (!update_thread_ || !update_thread_->busy()) {
-    pipeline_->add_scan(std::move(scan));
+    pipeline_->add_scan(std::move(scan), lidar);
     return;
   }
-  if (held_scans_ >= std::max<std::size_t>(1, options_.max_queued_scans)) {
-    const auto it = std::find_if(held_.begin(), held_.end(), [](const auto& v) {
-      return std::holds_alternative<LidarScan>(v);
-    });
+  if (held_scans_ >= std::max<std::size_t>(1, options_.max_queued_scans) * roles_.lidars.size()) {
+    const auto it = std::find_if(held_.begin(), held_.end(),
+                                 [](const auto& v) { return std::holds_alternative<HeldScan>(v); });
     held_.erase(it);
     --held_scans_;
     ++status_.held_scans_dropped;
   }
-  held_.emplace_back(std::move(scan));
+  held_.emplace_back(HeldScan{std::move(scan), lidar});
   ++held_scans_;
 }
 
@@ -179,8 +201,8 @@ void Scheduler::release_held() {
   for (auto& v : held_) {
     if (auto* imu = std::get_if<ImuSample>(&v)) {
       pipeline_->add_imu(*imu);
-    } else if (auto* scan = std::get_if<LidarScan>(&v)) {
-      pipeline_->add_scan(std::move(*scan));
+    } else if (auto* held = std::get_if<HeldScan>(&v)) {
+      pipeline_->add_scan(std::move(held->scan), held->lidar);
     } else {
       pipeline_->add_image(std::move(std::get<ImageFrame>(v)));
     }
@@ -211,7 +233,6 @@ const EstimatorStatus& Scheduler::estimator_status() {
 
 void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
   const auto body = static_cast<std::size_t>(roles_.body_imu);
-  const auto lidar = static_cast<std::size_t>(roles_.lidar);
   const int camera = roles_.camera;
   std::vector<std::optional<SensorInput>> by_index(config_.sensors.size());
   for (auto& in : inputs) {
@@ -223,7 +244,8 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
   for (std::size_t i = 0; i < config_.sensors.size(); ++i) {
     const SensorConfig& s = config_.sensors[i];
     const bool is_body = i == body;
-    const bool is_lidar = i == lidar;
+    const auto slot = std::find(roles_.lidars.begin(), roles_.lidars.end(), static_cast<int>(i));
+    const bool is_lidar = slot != roles_.lidars.end();
     const bool is_camera = static_cast<int>(i) == camera;
     if (!is_body && !is_lidar && !is_camera) continue;
     if (!by_index[i] || !by_index[i]->source) {
@@ -235,6 +257,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
     r->origin = by_index[i]->origin;
     r->source = std::move(by_index[i]->source);
     r->scans_to_estimator = is_lidar;
+    r->lidar_slot = is_lidar ? static_cast<std::size_t>(slot - roles_.lidars.begin()) : 0;
     r->imu_to_estimator = is_body;
     r->images_to_estimator = is_camera;
     r->imu_usable = sensor_kind(s.driver) == SensorKind::imu || s.imu.enabled;
@@ -266,7 +289,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
       LidarScan copy = scan;
       self->clock->map_scan(copy);
       ++self->scans;
-      to_estimator(std::move(copy));
+      to_estimator(std::move(copy), self->lidar_slot);
     };
     r->sinks.on_image = [this, self](const ImageFrame& image) {
       if (!self->images_to_estimator) return;

@@ -16,12 +16,17 @@
 // (and counted), never packets. The estimator sees the same measurements in the same order
 // either way, so its output does not depend on which thread ran it.
 //
-// The estimator takes the body IMU (body_frame) and one LiDAR: the body IMU's own LiDAR when the
-// body is an internal IMU ("<lidar>.imu"), else the first enabled LiDAR. T_imu_lidar is that
-// LiDAR's T_body_sensor. With estimator.vio.enabled it also takes the first enabled camera, whose
-// frames go through that camera's clock domain into the visual update (LIO then VIO at the image
-// time, estimator/sync); T_imu_cam is its T_body_sensor. The LiDAR's internal IMU, when enabled,
-// feeds its clock domain even when it is not the body IMU.
+// The estimator takes the body IMU (body_frame) and every enabled LiDAR (at most
+// estimator::kMaxLidars). The reference LiDAR - the body IMU's own LiDAR when the body is an
+// internal IMU ("<lidar>.imu"), else the first enabled LiDAR - is the estimator's LiDAR 0 (its
+// pose is the frame output's T_world_lidar); the others follow in configuration order. Each
+// LiDAR's scans go through its own clock domain and carry its own T_imu_lidar = its
+// T_body_sensor; the scans of different LiDARs need not be synchronised (estimator/sync: every
+// scan end is an update, docs/estimator.md "Several LiDARs"). With estimator.vio.enabled (one
+// LiDAR only) it also takes the first enabled camera, whose frames go through that camera's
+// clock domain into the visual update (LIO then VIO at the image time, estimator/sync); T_imu_cam
+// is its T_body_sensor. A LiDAR's internal IMU, when enabled, feeds its clock domain even when it
+// is not the body IMU.
 
 #include <cstddef>
 #include <cstdint>
@@ -46,15 +51,20 @@ namespace livod::daemon::runtime {
 // Which configured sensors the estimator uses, and how.
 struct SensorRoles {
   int body_imu = -1;  // index into config.sensors
-  int lidar = -1;     // the estimator's LiDAR
+  int lidar = -1;     // the estimator's reference LiDAR (its LiDAR 0)
   int camera = -1;    // the visual update's camera; -1: none (no camera, or VIO disabled)
-  Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();  // the reference LiDAR's
+  // Every LiDAR the estimator takes, by its estimator index (lidars[0] == lidar), and their
+  // extrinsics (T_body_sensor).
+  std::vector<int> lidars;
+  std::vector<Eigen::Isometry3d> T_imu_lidars;
   // Per sensor: why it is not used (empty when used). Disabled sensors and sensors the estimator
   // does not take.
   std::vector<std::string> unused_reason;
 };
 
-// Throws livod::Error when the configuration names no body IMU or has no enabled LiDAR.
+// Throws livod::Error when the configuration names no body IMU, has no enabled LiDAR, more than
+// estimator::kMaxLidars, or several LiDARs and a camera with estimator.vio.enabled.
 SensorRoles assign_roles(const LivodConfig& config);
 
 // The estimator's camera from a camera sensor's configuration: model, size and distortion at full
@@ -110,6 +120,7 @@ struct ScheduledSensor {
   std::unique_ptr<MeasurementSource> source;
   std::unique_ptr<SensorClockMapper> clock;
   bool scans_to_estimator = false;
+  std::size_t lidar_slot = 0;  // the estimator's index of this LiDAR (SensorRoles::lidars)
   bool imu_to_estimator = false;
   bool images_to_estimator = false;
   bool imu_usable = false;  // its IMU samples may feed the clock (an internal IMU, or an IMU)
@@ -196,7 +207,7 @@ class Scheduler {
   void refresh_status();
   // Measurement delivery: straight into the estimator, or held while an update runs.
   void to_estimator(const ImuSample& m);
-  void to_estimator(LidarScan scan);
+  void to_estimator(LidarScan scan, std::size_t lidar);
   void to_estimator(ImageFrame frame);
 
   const LivodConfig& config_;
@@ -223,7 +234,11 @@ class Scheduler {
   std::int64_t update_rx_ns_ = 0;  // receive time of the event that completed the group
   // Measurements that arrived during an update, in arrival order; bounded (oldest scan or sample
   // dropped, counted) so that an estimator stuck for long cannot grow memory.
-  std::vector<std::variant<ImuSample, LidarScan, ImageFrame>> held_;
+  struct HeldScan {
+    LidarScan scan;
+    std::size_t lidar = 0;  // the estimator's LiDAR slot
+  };
+  std::vector<std::variant<ImuSample, HeldScan, ImageFrame>> held_;
   std::size_t held_scans_ = 0;
   std::size_t held_imu_ = 0;
   EstimatorStatus status_;

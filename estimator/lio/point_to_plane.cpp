@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "core/so3.hpp"
 
@@ -20,7 +22,20 @@ PlaneRowJacobian point_to_plane_jacobian(const Eigen::Vector3d& n, double d,
 
 PointToPlane::PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar,
                            TaskRunner* runner, const PointNoise& noise, bool incidence)
-    : map_(map), T_imu_lidar_(T_imu_lidar), runner_(runner), noise_(noise), incidence_(incidence) {}
+    : PointToPlane(map, std::vector<Eigen::Isometry3d>{T_imu_lidar}, runner, noise, incidence) {}
+
+PointToPlane::PointToPlane(const VoxelMap& map, std::vector<Eigen::Isometry3d> T_imu_lidars,
+                           TaskRunner* runner, const PointNoise& noise, bool incidence)
+    : map_(map),
+      T_imu_lidars_(std::move(T_imu_lidars)),
+      runner_(runner),
+      noise_(noise),
+      incidence_(incidence) {
+  if (T_imu_lidars_.empty() || T_imu_lidars_.size() > kMaxLidars) {
+    throw std::invalid_argument("PointToPlane: between 1 and " + std::to_string(kMaxLidars) +
+                                " LiDAR extrinsics");
+  }
+}
 
 void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const State& x,
                                    std::size_t begin, std::size_t end, Block& block) {
@@ -29,11 +44,18 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
   constexpr std::size_t kSlotAhead = 16;
   constexpr std::size_t kNodeAhead = 8;
   const Eigen::Matrix3d& R = x.R_world_imu;
-  const Eigen::Matrix3d R_wl = R * T_imu_lidar_.linear();
-  const Eigen::Vector3d t_wl = R * T_imu_lidar_.translation() + x.p_world_imu;
+  // Each LiDAR's pose in the world at x (one with a single LiDAR).
+  const std::size_t lidars = T_imu_lidars_.size();
+  Eigen::Matrix3d R_wl[kMaxLidars];
+  Eigen::Vector3d t_wl[kMaxLidars];
+  for (std::size_t l = 0; l < lidars; ++l) {
+    R_wl[l] = R * T_imu_lidars_[l].linear();
+    t_wl[l] = R * T_imu_lidars_[l].translation() + x.p_world_imu;
+  }
   const double max_tan2 = std::pow(std::tan(noise_.max_incidence_rad), 2);
   const auto world = [&](std::size_t i) -> Eigen::Vector3d {
-    return R_wl * points[i].p_lidar + t_wl;
+    const std::uint32_t l = points[i].lidar;
+    return R_wl[l] * points[i].p_lidar + t_wl[l];
   };
   block.HtH.setZero();
   block.Htz.setZero();
@@ -49,14 +71,16 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
     }
     if (i + kNodeAhead < end) map_.resolve(world(i + kNodeAhead), hints_[i + kNodeAhead]);
     const Eigen::Vector3d& p_l = points[i].p_lidar;
-    const Eigen::Vector3d p_i = T_imu_lidar_ * p_l;
+    const std::uint32_t l = points[i].lidar;
+    const Eigen::Vector3d p_i = T_imu_lidars_[l] * p_l;
     PointQuery q;
     q.p = R * p_i + x.p_world_imu;
-    q.cov = R_wl * points[i].cov_lidar * R_wl.transpose();
+    q.cov = R_wl[l] * points[i].cov_lidar * R_wl[l].transpose();
     if (incidence_) {
+      // The ray from the point's own LiDAR.
       const double r = p_l.norm();
       if (r > 0.0) {
-        q.ray = R_wl * (p_l / r);
+        q.ray = R_wl[l] * (p_l / r);
         q.incidence_var = r * r * noise_.bearing_sigma_rad * noise_.bearing_sigma_rad;
         q.max_tan2 = max_tan2;
       }

@@ -11,9 +11,11 @@
 // per-point array and summed in point order, so the result does not depend on the thread count.
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <vector>
 
 #include "estimator/filter/esikf.hpp"
+#include "estimator/lidars.hpp"
 #include "estimator/map/point_covariance.hpp"
 #include "estimator/map/voxel_map.hpp"
 #include "estimator/task_runner.hpp"
@@ -23,6 +25,7 @@ namespace livod::estimator {
 struct ScanPoint {
   Eigen::Vector3d p_lidar = Eigen::Vector3d::Zero();
   Eigen::Matrix3d cov_lidar = Eigen::Matrix3d::Zero();
+  std::uint32_t lidar = 0;  // which LiDAR measured it: index into the T_imu_lidar list
 };
 
 // Prediction h = n^T (R p_imu + t) + d of one point against the plane n^T x + d = 0, and its
@@ -46,6 +49,9 @@ class PointToPlane {
   // `runner` (nullptr: the caller's thread) must outlive this object. `incidence`: add the
   // incidence-angle term of `noise` to each point's variance along the candidate plane's normal.
   PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_lidar, TaskRunner* runner,
+               const PointNoise& noise = {}, bool incidence = false);
+  // Several LiDARs: ScanPoint::lidar indexes `T_imu_lidars` (each point in its own LiDAR's frame).
+  PointToPlane(const VoxelMap& map, std::vector<Eigen::Isometry3d> T_imu_lidars, TaskRunner* runner,
                const PointNoise& noise = {}, bool incidence = false);
 
   // Accumulates the normal equations of every matched point at state x.
@@ -72,7 +78,7 @@ class PointToPlane {
                        std::size_t end, Block& block);
 
   const VoxelMap& map_;
-  Eigen::Isometry3d T_imu_lidar_;
+  std::vector<Eigen::Isometry3d> T_imu_lidars_;
   TaskRunner* runner_;
   PointNoise noise_;
   bool incidence_;

@@ -57,12 +57,21 @@ MappedTime MeasurementSync::scan_end(const LidarScan& scan) {
 
 void MeasurementSync::start(MappedTime t) {
   started_ = true;
+  start_ = t;
   last_update_ = t;
   last_imu_ = t;
   last_image_ = t;
   imu_.clear();
   scans_.clear();
   images_.clear();
+  lidars_.clear();
+  if (params_.lidars > 1) lidars_.resize(params_.lidars);
+}
+
+std::size_t MeasurementSync::queued_scans() const {
+  std::size_t n = scans_.size();
+  for (const LidarQueue& q : lidars_) n += q.scans.size();
+  return n;
 }
 
 void MeasurementSync::add_imu(const ImuSample& sample) {
@@ -79,7 +88,11 @@ void MeasurementSync::add_imu(const ImuSample& sample) {
   }
 }
 
-void MeasurementSync::add_scan(LidarScan scan) {
+void MeasurementSync::add_scan(LidarScan scan, std::size_t lidar) {
+  if (params_.lidars > 1) {
+    add_scan_of(std::move(scan), lidar);
+    return;
+  }
   ++counters_.scans_in;
   if (scan.empty()) return;
   const MappedTime end = scan_end(scan);
@@ -126,17 +139,18 @@ void MeasurementSync::take_imu_until(MappedTime t, MeasurementGroup& group) {
   if (!imu_.empty()) group.imu_after = imu_.front();
 }
 
-void MeasurementSync::take_points_until(MappedTime t, LidarScan& out) {
+void MeasurementSync::take_points_until(MappedTime t, std::deque<QueuedScan>& queue,
+                                        LidarScan& out) {
   out.clear();
-  if (scans_.empty()) return;
-  const LidarScan& first = scans_.front().scan;
+  if (queue.empty()) return;
+  const LidarScan& first = queue.front().scan;
   out.start = first.start;
   out.sequence = first.sequence;
-  while (!scans_.empty() && scans_.front().begin <= t) {
-    QueuedScan& q = scans_.front();
+  while (!queue.empty() && queue.front().begin <= t) {
+    QueuedScan& q = queue.front();
     if (q.end <= t) {
       append_points(q.scan, t, true, out);
-      scans_.pop_front();
+      queue.pop_front();
       continue;
     }
     // The scan straddles t: its earlier points join this group, the rest wait for the next one.
@@ -156,7 +170,7 @@ bool MeasurementSync::next_lidar(MeasurementGroup& group, std::size_t index) {
     group.scan = std::move(scans_.front().scan);
     scans_.pop_front();
   } else {
-    take_points_until(t, group.scan);
+    take_points_until(t, scans_, group.scan);
   }
   take_imu_until(t, group);
   last_update_ = t;
@@ -166,6 +180,7 @@ bool MeasurementSync::next_lidar(MeasurementGroup& group, std::size_t index) {
 
 bool MeasurementSync::next(MeasurementGroup& group) {
   if (!started_ || imu_.empty()) return false;
+  if (params_.lidars > 1) return next_of_lidars(group);
   const MappedTime imu_reach = imu_.back().stamp.mapped;
   if (!images_enabled_) {
     if (scans_.empty() || imu_reach < scans_.front().end) return false;
@@ -195,13 +210,87 @@ bool MeasurementSync::next(MeasurementGroup& group) {
   if (scans_.back().end < t_img || imu_reach < t_img) return false;
   group.kind = MeasurementGroup::Kind::image;
   group.t_update = t_img;
-  take_points_until(t_img, group.scan);
+  take_points_until(t_img, scans_, group.scan);
   take_imu_until(t_img, group);
   group.image = std::move(images_.front());
   images_.pop_front();
   last_update_ = t_img;
   ++counters_.groups;
   ++counters_.image_groups;
+  return true;
+}
+
+void MeasurementSync::add_scan_of(LidarScan scan, std::size_t lidar) {
+  ++counters_.scans_in;
+  if (scan.empty() || lidar >= params_.lidars) return;
+  if (lidars_.size() < params_.lidars) lidars_.resize(params_.lidars);
+  LidarQueue& q = lidars_[lidar];
+  const MappedTime end = scan_end(scan);
+  if (q.seen && end <= q.reach) {
+    ++counters_.scans_out_of_order;
+    return;
+  }
+  MappedTime begin = scan_begin(scan);
+  q.seen = true;
+  q.reach = end;
+  q.span = end - begin;
+  if (started_ && end <= last_update_) {
+    // A LiDAR late by more than a scan: the filter has passed all of its points.
+    ++counters_.scans_late;
+    counters_.points_late += scan.size();
+    return;
+  }
+  if (started_ && begin <= last_update_) {
+    // Its earlier points precede the filter's time (it did not wait for this LiDAR): the rest is
+    // used.
+    const std::size_t before = scan.size();
+    keep_after(scan, last_update_);
+    counters_.points_late += before - scan.size();
+    begin = scan_begin(scan);
+  }
+  q.scans.push_back(QueuedScan{std::move(scan), begin, end});
+  if (q.scans.size() > params_.max_queued_scans) {
+    q.scans.pop_front();
+    ++counters_.scans_queue_overflow;
+  }
+}
+
+bool MeasurementSync::next_of_lidars(MeasurementGroup& group) {
+  const MappedTime imu_reach = imu_.back().stamp.mapped;
+  // The update time: the earliest scan end queued.
+  std::size_t first = lidars_.size();
+  for (std::size_t l = 0; l < lidars_.size(); ++l) {
+    if (lidars_[l].scans.empty()) continue;
+    if (first == lidars_.size() ||
+        lidars_[l].scans.front().end < lidars_[first].scans.front().end) {
+      first = l;
+    }
+  }
+  if (first == lidars_.size()) return false;
+  const MappedTime t = lidars_[first].scans.front().end;
+  if (imu_reach < t) return false;
+  // Every LiDAR's points up to t must have arrived, unless that LiDAR is late.
+  const Nanoseconds wait = from_seconds(params_.lidar_wait_s);
+  for (const LidarQueue& q : lidars_) {
+    const bool arrived = q.seen && q.reach >= t;
+    // A LiDAR without a scan yet is waited for at the start only (its first scan may come a scan
+    // after the others'); one that never sends is late from then on.
+    const bool late = q.seen ? imu_reach - q.reach > q.span + wait
+                             : imu_reach - start_ > from_seconds(kFirstScanWaitS) + wait;
+    if (!arrived && !late) return false;
+  }
+  group.kind = MeasurementGroup::Kind::lidar;
+  group.t_update = t;
+  group.lidar = first;
+  group.scan_sequence = lidars_[first].scans.front().scan.sequence;
+  group.scan.clear();
+  group.scans.resize(lidars_.size());
+  for (std::size_t l = 0; l < lidars_.size(); ++l) {
+    take_points_until(t, lidars_[l].scans, group.scans[l]);
+  }
+  take_imu_until(t, group);
+  last_update_ = t;
+  ++counters_.groups;
   return true;
 }
 

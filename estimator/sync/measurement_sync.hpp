@@ -22,6 +22,18 @@
 // stop, odometry goes on at LiDAR rate, and it returns to image times when they come back
 // (FAST-LIVO2 stops: defect 1).
 //
+// Several LiDARs (SyncParams::lidars > 1; docs/estimator.md "Several LiDARs"): every scan end of
+// every LiDAR is an update time, and a group takes the points of every LiDAR measured in
+// (previous update, t_update] - the scans of the other LiDARs are cut at that time, their rest
+// waits for the next group. Each point is thus used once, in the interval the filter propagates
+// through, and the state never goes back in time however the scans overlap. A group waits until
+// every LiDAR's data have reached its update time, except for a LiDAR that is late: one whose
+// newest scan ended more than its own scan span + lidar_wait_s before the newest IMU sample (a
+// LiDAR that stopped, or one whose scans arrive much later than the others'); a LiDAR that has not
+// sent a scan yet is waited for during the first 0.2 s + lidar_wait_s only. Points of such a
+// LiDAR that arrive after the filter passed their time are dropped and counted. Image groups are
+// not made with several LiDARs (the configuration check refuses VIO with more than one LiDAR).
+//
 // Inputs carry mapped times: every per-sensor offset has been applied once, by the sensor's clock
 // domain, before anything reaches this class. Out-of-order input is dropped and counted; queues
 // are bounded (the oldest entry is dropped and counted), so a stalled consumer cannot grow memory.
@@ -41,6 +53,8 @@ struct SyncParams {
   std::size_t max_queued_imu = 4000;  // 2 s at 2 kHz, 10 s at 400 Hz
   std::size_t max_queued_images = 8;  // 0.8 s at 10 Hz (each holds its pixels)
   double image_timeout_s = 0.15;      // see the header comment
+  std::size_t lidars = 1;             // LiDARs feeding add_scan (index 0 .. lidars - 1)
+  double lidar_wait_s = 0.05;         // beyond a LiDAR's scan span: see the header comment
 };
 
 struct MeasurementGroup {
@@ -48,8 +62,14 @@ struct MeasurementGroup {
   Kind kind = Kind::lidar;
   MappedTime t_update;  // lidar: the scan end; image: the image's mid-exposure time
   // The points measured in (previous update, t_update]; times relative to scan.start as usual.
-  // May be empty in an image group (no LiDAR point since the last update).
+  // May be empty in an image group (no LiDAR point since the last update). Empty with several
+  // LiDARs: see `scans`.
   LidarScan scan;
+  // Several LiDARs: per LiDAR (by index) its points measured in (previous update, t_update], each
+  // scan referenced to its own start; empty with one LiDAR.
+  std::vector<LidarScan> scans;
+  std::size_t lidar = 0;            // the LiDAR whose scan ends at t_update
+  std::uint32_t scan_sequence = 0;  // that scan's sequence number
   // Samples stamped in (previous update, t_update], in time order.
   std::vector<ImuSample> imu;
   // The first sample after t_update, when it has arrived (interpolates the last interval).
@@ -61,6 +81,10 @@ struct SyncCounters {
   std::uint64_t scans_in = 0;
   std::uint64_t scans_out_of_order = 0;  // end at or before the previous group's
   std::uint64_t scans_queue_overflow = 0;
+  // Several LiDARs: scans of a late LiDAR that ended before the filter's time (dropped whole), and
+  // the points of partly late scans measured before it (dropped, the rest of the scan used).
+  std::uint64_t scans_late = 0;
+  std::uint64_t points_late = 0;
   std::uint64_t imu_in = 0;
   std::uint64_t imu_out_of_order = 0;  // stamp at or before the previous sample's
   std::uint64_t imu_queue_overflow = 0;
@@ -85,8 +109,8 @@ class MeasurementSync {
 
   void add_imu(const ImuSample& sample);
   // Empty scans are ignored. The scan end is its latest point time. Taken by value: a caller that
-  // no longer needs its copy moves it into the queue.
-  void add_scan(LidarScan scan);
+  // no longer needs its copy moves it into the queue. `lidar`: which LiDAR (< SyncParams::lidars).
+  void add_scan(LidarScan scan, std::size_t lidar = 0);
   // Queued by mid_exposure. The group shares the pixel buffer (cv::Mat reference counting).
   void add_image(ImageFrame image);
 
@@ -94,7 +118,7 @@ class MeasurementSync {
   bool next(MeasurementGroup& group);
 
   [[nodiscard]] const SyncCounters& counters() const { return counters_; }
-  [[nodiscard]] std::size_t queued_scans() const { return scans_.size(); }
+  [[nodiscard]] std::size_t queued_scans() const;
   [[nodiscard]] std::size_t queued_imu() const { return imu_.size(); }
   [[nodiscard]] std::size_t queued_images() const { return images_.size(); }
 
@@ -109,20 +133,35 @@ class MeasurementSync {
     bool cut = false;  // the rest of a scan cut at an image time
   };
 
+  // One LiDAR's queue in the several-LiDAR mode.
+  struct LidarQueue {
+    std::deque<QueuedScan> scans;
+    bool seen = false;    // a scan of this LiDAR has arrived
+    MappedTime reach;     // the end of its newest scan
+    Nanoseconds span{0};  // the span of its newest scan (its scan period, near enough)
+  };
+
   // A lidar group ending at the end of scans_[index] (index 1: the front is the rest of a cut).
   bool next_lidar(MeasurementGroup& group, std::size_t index);
-  // Fills group.scan with every queued point up to t (cutting the scan that straddles t).
-  void take_points_until(MappedTime t, LidarScan& out);
+  // Fills `out` with every point of `queue` up to t (cutting the scan that straddles t).
+  static void take_points_until(MappedTime t, std::deque<QueuedScan>& queue, LidarScan& out);
+  void add_scan_of(LidarScan scan, std::size_t lidar);
+  bool next_of_lidars(MeasurementGroup& group);
   void take_imu_until(MappedTime t, MeasurementGroup& group);
 
   SyncParams params_;
   bool started_ = false;
   bool images_enabled_ = false;
+  // Several LiDARs: how long a LiDAR without any scan yet is waited for after the start (a scan
+  // period of the slowest common LiDARs, 5 Hz).
+  static constexpr double kFirstScanWaitS = 0.2;
+  MappedTime start_;        // where the timeline started
   MappedTime last_update_;  // the last group's update time (or the start)
   MappedTime last_imu_;     // the newest accepted sample (or the start)
   MappedTime last_image_;   // the newest accepted image
   std::deque<ImuSample> imu_;
   std::deque<QueuedScan> scans_;
+  std::vector<LidarQueue> lidars_;  // several LiDARs only (scans_ is then unused)
   std::deque<ImageFrame> images_;
   SyncCounters counters_;
 };

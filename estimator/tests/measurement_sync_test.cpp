@@ -333,5 +333,146 @@ TEST(MeasurementSync, LateAndDisabledImages) {
   EXPECT_EQ(sync.queued_images(), 0U);
 }
 
+// Several LiDARs. A scan of `span_ms` + 1 points, one per ms from `start_ms`; x tags the LiDAR,
+// y the point's absolute time in ms.
+LidarScan dense_scan(int lidar, std::int64_t start_ms, int span_ms, std::uint32_t sequence) {
+  LidarScan s;
+  s.start.mapped = MappedTime(start_ms * kMs);
+  s.sequence = sequence;
+  for (int i = 0; i <= span_ms; ++i) {
+    s.push_back(static_cast<float>(lidar), static_cast<float>(start_ms + i), 0, 0, 0, 0,
+                static_cast<std::int32_t>(i * kMs));
+  }
+  return s;
+}
+
+// Two 10 Hz LiDARs whose scans overlap (B's are cut 40 ms after A's), each scan arriving when it
+// ends, the IMU 60 ms late: every scan end of either is an update, in time order; each group holds
+// every point of both measured since the last update, and nothing twice.
+TEST(MeasurementSyncLidars, EveryScanEndIsAnUpdateAndEachPointIsUsedOnce) {
+  MeasurementSync sync(SyncParams{.lidars = 2});
+  sync.start(MappedTime(0));
+  std::vector<MeasurementGroup> groups;
+  MeasurementGroup g;
+  std::uint32_t seq_a = 0;
+  std::uint32_t seq_b = 0;
+  for (std::int64_t t = 1; t <= 620; ++t) {
+    if (t % 5 == 0 && t > 60) sync.add_imu(imu_at((t - 60) * kMs));
+    // A: [100k + 1, 100k + 100]; B: [1, 40], then [100k + 41, 100k + 140].
+    if (t % 100 == 0) sync.add_scan(dense_scan(0, t - 99, 99, seq_a++), 0);
+    if (t == 40) sync.add_scan(dense_scan(1, 1, 39, seq_b++), 1);
+    if (t % 100 == 40 && t >= 140) sync.add_scan(dense_scan(1, t - 99, 99, seq_b++), 1);
+    while (sync.next(g)) groups.push_back(g);
+  }
+  ASSERT_EQ(groups.size(), 11U);  // 40, 100, 140, ..., 540
+  std::int64_t previous = 0;
+  std::vector<int> seen_a;
+  std::vector<int> seen_b;
+  for (const auto& group : groups) {
+    EXPECT_EQ(group.kind, MeasurementGroup::Kind::lidar);
+    EXPECT_TRUE(group.scan.empty());
+    ASSERT_EQ(group.scans.size(), 2U);
+    const std::int64_t t_ms = group.t_update.ns / kMs;
+    EXPECT_GT(t_ms, previous);
+    // Update times: A's ends (100, 200, ...) and B's (40, 140, 240, ...).
+    EXPECT_TRUE(t_ms % 100 == 0 || t_ms % 100 == 40) << t_ms;
+    EXPECT_EQ(group.lidar, t_ms % 100 == 0 ? 0U : 1U);
+    for (std::size_t l = 0; l < 2; ++l) {
+      const LidarScan& scan = group.scans[l];
+      for (std::size_t i = 0; i < scan.size(); ++i) {
+        EXPECT_EQ(scan.x[i], static_cast<float>(l));
+        const auto time_ms = scan.point_time(i).ns / kMs;
+        EXPECT_EQ(time_ms, static_cast<std::int64_t>(scan.y[i])) << "re-referenced time";
+        EXPECT_GT(time_ms, previous);
+        EXPECT_LE(time_ms, t_ms);
+        (l == 0 ? seen_a : seen_b).push_back(static_cast<int>(time_ms));
+      }
+    }
+    // The IMU samples of the interval, as with one LiDAR.
+    ASSERT_FALSE(group.imu.empty());
+    EXPECT_GT(group.imu.front().stamp.mapped.ns, previous * kMs);
+    EXPECT_LE(group.imu.back().stamp.mapped.ns, t_ms * kMs);
+    previous = t_ms;
+  }
+  EXPECT_EQ(previous, 540);
+  // No point twice, none lost up to the last update.
+  for (auto* seen : {&seen_a, &seen_b}) {
+    std::vector<int> sorted = *seen;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end());
+    EXPECT_EQ(sorted.size(), 540U);
+  }
+  EXPECT_EQ(sync.counters().points_late, 0U);
+  EXPECT_EQ(sync.counters().scans_late, 0U);
+}
+
+// A group waits for the other LiDAR's points up to its update time; once that LiDAR falls behind
+// by more than its scan span + lidar_wait_s of IMU time, the other goes on without it, and the
+// late LiDAR's points before the filter's time are dropped and counted.
+TEST(MeasurementSyncLidars, WaitsForTheOtherLidarUnlessItIsLate) {
+  MeasurementSync sync(SyncParams{.lidars = 2, .lidar_wait_s = 0.05});
+  sync.start(MappedTime(0));
+  for (std::int64_t t = 5; t <= 150; t += 5) sync.add_imu(imu_at(t * kMs));
+  sync.add_scan(dense_scan(1, 1, 59, 0), 1);  // B: [1, 60]
+  sync.add_scan(dense_scan(0, 1, 99, 0), 0);  // A: [1, 100]
+  MeasurementGroup g;
+  ASSERT_TRUE(sync.next(g));  // B's end, 60: A's points up to 60 have arrived
+  EXPECT_EQ(g.t_update.ns, 60 * kMs);
+  EXPECT_EQ(g.scans[0].size(), 60U);
+  EXPECT_EQ(g.scans[1].size(), 60U);
+  // A's end, 100: B's data reach only 60, and the IMU (150) is within B's span (59 ms) + 50 ms.
+  EXPECT_FALSE(sync.next(g));
+  sync.add_imu(imu_at(170 * kMs));  // 170 - 60 > 59 + 50: B is late
+  ASSERT_TRUE(sync.next(g));
+  EXPECT_EQ(g.t_update.ns, 100 * kMs);
+  EXPECT_EQ(g.scans[0].size(), 40U);
+  EXPECT_TRUE(g.scans[1].empty());
+  // B's next scan [61, 120] arrives late: its points up to 100 are dropped, the rest is used.
+  sync.add_scan(dense_scan(1, 61, 59, 1), 1);
+  EXPECT_EQ(sync.counters().points_late, 40U);
+  EXPECT_FALSE(sync.next(g));       // 120: A (reach 100, span 99) is not late at IMU 170
+  sync.add_imu(imu_at(260 * kMs));  // 260 - 100 > 99 + 50: now it is
+  ASSERT_TRUE(sync.next(g));
+  EXPECT_EQ(g.t_update.ns, 120 * kMs);
+  EXPECT_EQ(g.scans[1].size(), 20U);
+  // A scan that ended before the filter's time is dropped whole.
+  sync.add_scan(dense_scan(0, 20, 50, 1), 0);
+  EXPECT_EQ(sync.counters().scans_out_of_order, 1U);  // A's own order: ends before A's newest
+  sync.add_scan(dense_scan(1, 121, 10, 2), 1);
+  ASSERT_TRUE(sync.next(g));
+  EXPECT_EQ(g.t_update.ns, 131 * kMs);
+  // A's next scan [101, 110] ended before the filter's time (131): dropped whole.
+  sync.add_scan(dense_scan(0, 101, 9, 2), 0);
+  EXPECT_EQ(sync.counters().scans_late, 1U);
+  EXPECT_EQ(sync.counters().points_late, 50U);
+}
+
+// At the start a LiDAR without a scan yet is waited for (its first scan may come a scan after the
+// others'), for 0.2 s + lidar_wait_s of IMU data at most: one that never sends stalls nothing
+// after.
+TEST(MeasurementSyncLidars, ALidarWithoutScansIsWaitedForAtTheStartOnly) {
+  MeasurementSync sync(SyncParams{.lidars = 2, .lidar_wait_s = 0.05});
+  sync.start(MappedTime(0));
+  for (std::int64_t t = 5; t <= 150; t += 5) sync.add_imu(imu_at(t * kMs));
+  sync.add_scan(dense_scan(0, 1, 99, 0), 0);  // A: [1, 100]
+  MeasurementGroup g;
+  EXPECT_FALSE(sync.next(g));                  // B may still send its first scan
+  sync.add_scan(dense_scan(1, 31, 99, 0), 1);  // B: [31, 130] reaches past 100
+  ASSERT_TRUE(sync.next(g));
+  EXPECT_EQ(g.t_update.ns, 100 * kMs);
+  EXPECT_EQ(g.scans[1].size(), 70U);  // B's points 31 .. 100: none late
+  EXPECT_EQ(sync.counters().points_late, 0U);
+
+  MeasurementSync lone(SyncParams{.lidars = 2, .lidar_wait_s = 0.05});
+  lone.start(MappedTime(0));
+  for (std::int64_t t = 5; t <= 250; t += 5) lone.add_imu(imu_at(t * kMs));
+  lone.add_scan(dense_scan(0, 1, 99, 0), 0);
+  EXPECT_FALSE(lone.next(g));       // IMU 250 ms: within 0.2 s + 50 ms of the start
+  lone.add_imu(imu_at(255 * kMs));  // past it: B is late, A goes on alone
+  ASSERT_TRUE(lone.next(g));
+  EXPECT_EQ(g.t_update.ns, 100 * kMs);
+  EXPECT_TRUE(g.scans[1].empty());
+}
+
 }  // namespace
 }  // namespace livod::estimator

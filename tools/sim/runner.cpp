@@ -39,6 +39,8 @@ World make_world(const Scenario& s, std::uint64_t seed) {
       return make_room_world(seed);
     case WorldKind::kCorridor:
       return make_corridor_world();
+    case WorldKind::kCorridorSideRooms:
+      return make_corridor_side_rooms_world();
     case WorldKind::kStreet:
       return make_street_world(seed, s.street_length_m);
   }

@@ -192,7 +192,7 @@ Scenario base(const std::string& name, const std::string& description, WorldKind
 }
 
 // The built-in scenarios, in the order they are listed.
-constexpr std::array<const char*, 11> kScenarioNames{"room_handheld_os1_64",
+constexpr std::array<const char*, 14> kScenarioNames{"room_handheld_os1_64",
                                                      "room_handheld_avia",
                                                      "room_handheld_mid360",
                                                      "room_aggressive_os1_64",
@@ -202,7 +202,10 @@ constexpr std::array<const char*, 11> kScenarioNames{"room_handheld_os1_64",
                                                      "street_drone_os1_64",
                                                      "corridor_handheld_os1_64",
                                                      "corridor_handheld_os1_64_camera",
-                                                     "room_handheld_os1_64_camera_faults"};
+                                                     "room_handheld_os1_64_camera_faults",
+                                                     "room_dual_mid360",
+                                                     "street_vehicle_vlp16_avia",
+                                                     "corridor_side_rooms_dual_avia"};
 
 }  // namespace
 
@@ -326,6 +329,55 @@ Scenario make_scenario(const std::string& name) {
     cam.params.outages = {{13.0, 18.0}};
     s.cameras.push_back(cam);
     s.body_imu = "os1";
+    return s;
+  }
+  if (name == "room_dual_mid360") {
+    // Two Mid-360s back to back, as docs/examples/dual-mid360.yaml mounts them (closer, for a
+    // handheld rig): the front one's IMU is the body, the rear one is turned around and tilted
+    // down, its IMU off. Their clocks differ by 1.03 s, so their 10 Hz scans are cut 30 ms apart.
+    Scenario s = base(name,
+                      "indoor room, handheld walk, two Livox Mid-360 facing opposite ways "
+                      "(unsynchronised scans), the front one's IMU",
+                      WorldKind::kRoom, handheld_room(), 30.0);
+    s.lidars.push_back(livox("MID-360", "front", {-0.011, -0.02329, 0.04412}));
+    LidarMount rear = livox("MID-360", "rear", {-0.35, 0.0, 0.02});
+    rear.T_body_sensor.linear() = rpy(0.0, 0.3, M_PI);
+    rear.clock.offset_s += 1.03;
+    rear.imu = false;
+    s.lidars.push_back(rear);
+    s.body_imu = "front";
+    return s;
+  }
+  if (name == "street_vehicle_vlp16_avia") {
+    // The VLP-16 of street_vehicle_vlp16 on the roof plus a forward-looking Avia on the front
+    // bumper, each on its own clock (scans cut 40 ms apart), the CAN IMU as the body.
+    Scenario s = make_scenario("street_vehicle_vlp16");
+    s.name = name;
+    s.description =
+        "street, ground vehicle at 10 m/s (>= 300 m), Velodyne VLP-16 (roof) + Livox Avia "
+        "(bumper, forward) + CAN IMU";
+    LidarMount avia = livox("AVIA", "avia", {1.8, 0.0, -0.9});
+    avia.T_body_sensor.linear() = rpy(0.0, 0.05, 0.0);
+    avia.clock.offset_s = 2000.04;
+    avia.imu = false;
+    s.lidars.push_back(avia);
+    return s;
+  }
+  if (name == "corridor_side_rooms_dual_avia") {
+    // A forward-looking Avia sees the corridor's walls, floor and ceiling and the doorways at
+    // grazing angles only: nearly degenerate along x. A second Avia looking left sees into the
+    // side rooms as it passes their doorways.
+    Scenario s = base(name,
+                      "corridor with side rooms behind doorways in its left wall, Livox Avia "
+                      "looking forward (+ IMU) and Livox Avia looking left",
+                      WorldKind::kCorridorSideRooms, corridor_walk(), 30.0);
+    s.lidars.push_back(livox("AVIA", "forward", {0.04165, 0.02326, -0.0284}));
+    LidarMount side = livox("AVIA", "side", {0.0, 0.12, 0.05});
+    side.T_body_sensor.linear() = rpy(0.0, 0.0, M_PI / 2);
+    side.clock.offset_s += 0.55;
+    side.imu = false;
+    s.lidars.push_back(side);
+    s.body_imu = "forward";
     return s;
   }
   std::string known;

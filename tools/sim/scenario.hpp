@@ -18,7 +18,7 @@
 
 namespace livod::sim {
 
-enum class WorldKind { kRoom, kCorridor, kStreet };
+enum class WorldKind { kRoom, kCorridor, kCorridorSideRooms, kStreet };
 
 struct LidarMount {
   std::string model;  // as `livod decode --model` spells it: OS1-64, OS1-128, VLP-16, AVIA, MID-360

@@ -3,7 +3,7 @@
 //   base: room_handheld_avia      # optional: start from a named scenario, override below
 //   name: my_run
 //   description: ...
-//   world: room | corridor | street
+//   world: room | corridor | corridor_side_rooms | street
 //   street_length_m: 420
 //   duration_s: 30
 //   trajectory:                   # each of x y z roll pitch yaw: {c0, c1, terms: [[a, w,
@@ -163,10 +163,12 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
       s.world = WorldKind::kRoom;
     else if (name == "corridor")
       s.world = WorldKind::kCorridor;
+    else if (name == "corridor_side_rooms")
+      s.world = WorldKind::kCorridorSideRooms;
     else if (name == "street")
       s.world = WorldKind::kStreet;
     else
-      p.add(w, "scenario.world", "expected room, corridor or street");
+      p.add(w, "scenario.world", "expected room, corridor, corridor_side_rooms or street");
   }
   if (const auto t = root["trajectory"]) {
     check_keys(t,

@@ -100,6 +100,58 @@ World make_corridor_world() {
   return w;
 }
 
+World make_corridor_side_rooms_world() {
+  World w;
+  constexpr double kStart = -5.0;
+  constexpr double kLength = 80.0;
+  constexpr double kHalfWidth = 1.2;
+  constexpr double kHeight = 3.0;
+  constexpr double kWall = 0.1;
+  constexpr double kThin = 0.02;        // half thickness of the left wall and the rooms' walls
+  constexpr double kDoorSpacing = 6.0;  // a doorway every 6 m, the first at x = 3
+  constexpr double kDoorWidth = 1.0;
+  constexpr double kRoomLength = 2.5;  // along x, ending flush with its doorway's far jamb
+  constexpr double kRoomDepth = 3.0;   // along +y, behind the wall
+  const double cx = kStart + kLength / 2;
+  const double hx = kLength / 2 + kWall;
+  // Floor and ceiling cover the rooms too.
+  const double y_far = kHalfWidth + 2 * kThin + kRoomDepth;
+  const double floor_cy = (y_far - kHalfWidth) / 2;
+  const double floor_hy = (y_far + kHalfWidth) / 2 + kWall;
+  w.add_box({cx, floor_cy, -kWall}, {hx, floor_hy, kWall}, 0.0, surface(0.3F, 2.0F, 11));
+  w.add_box({cx, floor_cy, kHeight + kWall}, {hx, floor_hy, kWall}, 0.0, surface(0.6F, 2.0F, 12));
+  // The right wall (-y) is uniform, as in the featureless corridor.
+  w.add_box({cx, -kHalfWidth - kWall, kHeight / 2}, {hx, kWall, kHeight / 2}, 0.0,
+            surface(0.5F, 2.0F, 14));
+  // The left wall (+y): thin segments between doorways (their jambs are 4 cm: nothing to fit a
+  // plane to), a room behind each doorway extending back (-x) from it. A LiDAR looking forward
+  // along the corridor sees a room's far side wall (flush with the doorway's far jamb) only as a
+  // sliver through the doorway at grazing angles, and never its near side wall, which faces +x.
+  // A LiDAR looking sideways sees into the room as it passes.
+  const double y_wall = kHalfWidth + kThin;
+  double x = kStart - kWall;
+  std::uint32_t id = 100;
+  for (double door = 3.0; door + kDoorWidth < kStart + kLength; door += kDoorSpacing) {
+    w.add_box({(x + door) / 2, y_wall, kHeight / 2}, {(door - x) / 2, kThin, kHeight / 2}, 0.0,
+              surface(0.5F, 2.0F, id++));
+    const double room_x1 = door + kDoorWidth;
+    const double room_x0 = room_x1 - kRoomLength;
+    const double room_y = y_wall + kThin + kRoomDepth / 2;
+    w.add_box({room_x0 - kThin, room_y, kHeight / 2}, {kThin, kRoomDepth / 2 + kThin, kHeight / 2},
+              0.0, surface(0.45F, 1.9F, id++));
+    w.add_box({room_x1 + kThin, room_y, kHeight / 2}, {kThin, kRoomDepth / 2 + kThin, kHeight / 2},
+              0.0, surface(0.45F, 1.9F, id++));
+    w.add_box({(room_x0 + room_x1) / 2, y_far + kThin, kHeight / 2},
+              {kRoomLength / 2 + 2 * kThin, kThin, kHeight / 2}, 0.0, surface(0.45F, 1.9F, id++));
+    x = room_x1;
+  }
+  const double end = kStart + kLength + kWall;
+  w.add_box({(x + end) / 2, y_wall, kHeight / 2}, {(end - x) / 2, kThin, kHeight / 2}, 0.0,
+            surface(0.5F, 2.0F, id++));
+  w.build();
+  return w;
+}
+
 World make_street_world(std::uint64_t seed, double length) {
   World w;
   constexpr double kStart = -20.0;

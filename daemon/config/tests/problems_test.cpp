@@ -689,7 +689,37 @@ TEST(ConfigImplemented, WhatCannotRunIsAnError) {
     source: {udp: {}}
     extrinsic: {translation: [0, 0, 0.3], rotation: {rpy_deg: [0, 0, 0]}}
 )";
-  EXPECT_EQ(not_implemented(two_lidars), std::vector<std::string>{"sensors[1].enabled"});
+  // Every enabled LiDAR feeds the estimator.
+  EXPECT_TRUE(not_implemented(two_lidars).empty());
+  // ... LiDAR-inertially: with the visual update (a camera and VIO on) the second is refused, with
+  // a message that says how to fuse both.
+  const std::string cam_replayed = replayed.substr(replayed.find("  - name: cam\n"));
+  const ConfigResult lidars_vio = load_config_from_string(two_lidars + cam_replayed, "test.yaml");
+  ASSERT_EQ(not_implemented(two_lidars + cam_replayed),
+            std::vector<std::string>{"sensors[1].enabled"});
+  bool explained = false;
+  for (const auto& p : lidars_vio.problems) {
+    if (p.kind == ProblemKind::not_implemented &&
+        p.message.find("estimator.vio.enabled: false") != std::string::npos) {
+      explained = true;
+    }
+  }
+  EXPECT_TRUE(explained) << test::dump(lidars_vio);
+  EXPECT_TRUE(
+      not_implemented(two_lidars + cam_replayed + "estimator: {vio: {enabled: false}}\n").empty());
+  // At most 8 LiDARs: the ninth is refused.
+  std::string nine_lidars = kLidar;
+  for (int i = 1; i < 9; ++i) {
+    nine_lidars += "  - name: vlp" + std::to_string(i) + R"(
+    driver: velodyne
+    model: VLP-16
+    source: {udp: {ports: {lidar: )" +
+                   std::to_string(3000 + 10 * i) + ", position: " + std::to_string(3001 + 10 * i) +
+                   R"(}}}
+    extrinsic: {translation: [0, 0, 0.3], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  }
+  EXPECT_EQ(not_implemented(nine_lidars), std::vector<std::string>{"sensors[8].enabled"});
 
   const std::string extra_imu = std::string(kLidar) + R"(  - name: can
     driver: can_imu
