@@ -58,6 +58,21 @@ void put_vec3f(std::vector<std::uint8_t>& out, const Eigen::Vector3d& v) {
     put_le(out, std::bit_cast<std::uint32_t>(static_cast<float>(v[i])), 4);
 }
 
+// CRC-16-CCITT (poly 0x1021, MSB first), one byte at a time: crc = (crc << 8) ^ T[(crc >> 8) ^ b].
+constexpr std::array<std::uint16_t, 256> make_crc_table() {
+  std::array<std::uint16_t, 256> table{};
+  for (unsigned i = 0; i < 256; ++i) {
+    auto crc = static_cast<std::uint16_t>(i << 8);
+    for (int k = 0; k < 8; ++k) {
+      crc = (crc & 0x8000) != 0 ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021)
+                                : static_cast<std::uint16_t>(crc << 1);
+    }
+    table[i] = crc;
+  }
+  return table;
+}
+constexpr std::array<std::uint16_t, 256> kCrcTable = make_crc_table();
+
 // One of the accel / gyro readings of a packet, compensated or not.
 struct Reading {
   Eigen::Vector3d value = Eigen::Vector3d::Zero();
@@ -77,11 +92,7 @@ struct Reading {
 std::uint16_t vectornav_crc16(std::span<const std::uint8_t> bytes) {
   std::uint16_t crc = 0;
   for (const std::uint8_t b : bytes) {
-    crc = static_cast<std::uint16_t>(crc ^ (b << 8));
-    for (int k = 0; k < 8; ++k) {
-      crc = (crc & 0x8000) != 0 ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021)
-                                : static_cast<std::uint16_t>(crc << 1);
-    }
+    crc = static_cast<std::uint16_t>((crc << 8) ^ kCrcTable[((crc >> 8) ^ b) & 0xFF]);
   }
   return crc;
 }
