@@ -1,6 +1,6 @@
 // IMU decode throughput, one core: the CAN decoders (SBG, Bosch MM7, a custom YAML-described
-// decoder) on their frames, and the Xsens MTData2 stream decoder on a byte stream read in 64-byte
-// chunks (messages torn across reads). items_per_second = samples/s of CPU time.
+// decoder) on their frames, and the Xsens MTData2 and VectorNav binary stream decoders on a byte
+// stream read in 64-byte chunks (messages torn across reads). items_per_second = samples/s of CPU time.
 //
 //   ./imu_decode_bench --benchmark_min_time=1
 
@@ -11,6 +11,7 @@
 #include "drivers/imu/bosch_mm7.hpp"
 #include "drivers/imu/custom_can.hpp"
 #include "drivers/imu/sbg_can.hpp"
+#include "drivers/imu/vectornav_binary.hpp"
 #include "drivers/imu/xsens_mtdata2.hpp"
 
 namespace {
@@ -114,6 +115,32 @@ void BM_XsensMtData2(benchmark::State& state) {
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * stream.size()));
 }
 BENCHMARK(BM_XsensMtData2);
+
+// The simulator's VN-100 packet: Common TimeStartup, AngularRate, Accel; IMU SensSat (42 bytes).
+void BM_VectorNavBinary(benchmark::State& state) {
+  std::vector<std::byte> stream;
+  for (int k = 0; k < kSamples; ++k) {
+    livod::imu::VectorNavSample v;
+    v.time_startup_ns = 2'500'000ULL * static_cast<std::uint64_t>(k + 1);
+    v.accel_m_s2 = Eigen::Vector3d(0.01 * k, -0.2, 9.81);
+    for (const auto b : livod::imu::encode_vectornav_sample(v))
+      stream.push_back(static_cast<std::byte>(b));
+  }
+  livod::imu::VectorNavBinaryDecoder d;
+  std::size_t samples = 0;
+  const livod::imu::ImuSink sink = [&](const livod::ImuSample& s) {
+    benchmark::DoNotOptimize(s.accel_m_s2.data());
+    ++samples;
+  };
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < stream.size(); i += 64) {
+      d.on_bytes({stream.data() + i, std::min<std::size_t>(64, stream.size() - i)}, 0, sink);
+    }
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(samples));
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * stream.size()));
+}
+BENCHMARK(BM_VectorNavBinary);
 
 }  // namespace
 

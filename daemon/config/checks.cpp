@@ -435,11 +435,8 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
     }
     // drivers/imu has the live SocketCAN and serial/USB sources and their decoders
     // (daemon/devices), but the runtime does not start them yet: `livod run` would fail at open.
-    if (s.driver == Driver::serial_imu) {
-      problems.error(ProblemKind::not_implemented, sites[i].path + ".driver", sites[i].at,
-                     where + ": serial IMUs cannot be run yet: `livod run` has no live serial " +
-                         "IMU source and `livod replay` cannot read serial captures");
-    } else if (sites[i].source_ok && std::holds_alternative<DeviceSourceConfig>(s.source)) {
+    // (Their recordings replay: candump logs, serial captures.)
+    if (sites[i].source_ok && std::holds_alternative<DeviceSourceConfig>(s.source)) {
       problems.error(ProblemKind::not_implemented, sites[i].path + ".source", sites[i].at,
                      where + ": `livod run` does not start live " +
                          std::string(enum_name(s.driver)) +

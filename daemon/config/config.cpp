@@ -57,11 +57,12 @@ constexpr std::array<EnumEntry<SensorKind>, 3> kSensorKinds{{
     {"camera", SensorKind::camera},
     {"imu", SensorKind::imu},
 }};
-constexpr std::array<EnumEntry<ReplayFormat>, 4> kReplayFormats{{
+constexpr std::array<EnumEntry<ReplayFormat>, 5> kReplayFormats{{
     {"pcap", ReplayFormat::pcap},
     {"candump", ReplayFormat::candump},
     {"rosbag1", ReplayFormat::rosbag1},
     {"euroc", ReplayFormat::euroc},
+    {"serial", ReplayFormat::serial},
 }};
 constexpr std::array<EnumEntry<FrameCutMode>, 3> kFrameCutModes{{
     {"azimuth", FrameCutMode::azimuth},

@@ -54,7 +54,7 @@ struct UdpSourceConfig {
   int socket_buffer_bytes = 8 * 1024 * 1024;
 };
 
-enum class ReplayFormat { pcap, candump, rosbag1, euroc };
+enum class ReplayFormat { pcap, candump, rosbag1, euroc, serial };
 
 struct ReplaySourceConfig {
   std::filesystem::path file;  // absolute (resolved against the config file's folder)

@@ -264,7 +264,8 @@ std::optional<ReplayFormat> format_from_extension(const std::filesystem::path& f
   if (ext == ".pcap" || ext == ".pcapng") return ReplayFormat::pcap;
   if (ext == ".log" || ext == ".candump") return ReplayFormat::candump;
   if (ext == ".bag") return ReplayFormat::rosbag1;
-  if (ext.empty()) return ReplayFormat::euroc;  // a folder
+  if (ext == ".serial") return ReplayFormat::serial;  // io/serial_capture.hpp
+  if (ext.empty()) return ReplayFormat::euroc;        // a folder
   return std::nullopt;
 }
 
@@ -289,7 +290,7 @@ bool read_replay(MapReader& r, Driver driver, const ReadContext& context,
       problems.error(ProblemKind::invalid_value, r.child_path("format"), file_value->at,
                      "cannot tell the format of '" + replay.file.filename().string() +
                          "' from its extension; set 'format' (one of: pcap, candump, rosbag1, "
-                         "euroc)");
+                         "euroc, serial)");
       ok = false;
     }
   }
@@ -506,13 +507,7 @@ void read_clock(MapReader& c, ClockConfig& clock) {
 
 void read_serial(MapReader& s, SerialConfig& serial) {
   if (const auto v = s.require("protocol", "xsens_mtdata2 or vectornav_binary")) {
-    if (const auto p = parse_enum<SerialProtocol>(s.problems(), *v)) {
-      serial.protocol = *p;
-      if (*p == SerialProtocol::vectornav_binary) {
-        s.problems().error(ProblemKind::not_implemented, v->path, v->at,
-                           "vectornav_binary is not implemented (xsens_mtdata2 is)");
-      }
-    }
+    if (const auto p = parse_enum<SerialProtocol>(s.problems(), *v)) serial.protocol = *p;
   }
   if (const auto v = s.take("baud_rate"); v && !v->node.IsNull()) {
     static constexpr std::array<long long, 12> kBaudRates = {9600,    19200,   38400,   57600,

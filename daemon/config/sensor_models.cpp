@@ -128,6 +128,8 @@ std::vector<ReplayFormat> replay_formats(Driver driver) {
       return {ReplayFormat::euroc, ReplayFormat::rosbag1};
     case Driver::can_imu:
       return {ReplayFormat::candump, ReplayFormat::rosbag1};
+    case Driver::serial_imu:
+      return {ReplayFormat::serial};
     case Driver::dataset_lidar:
       return {ReplayFormat::rosbag1};
     default:

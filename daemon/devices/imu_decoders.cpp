@@ -4,6 +4,7 @@
 #include "drivers/imu/bosch_mm7.hpp"
 #include "drivers/imu/custom_can.hpp"
 #include "drivers/imu/sbg_can.hpp"
+#include "drivers/imu/vectornav_binary.hpp"
 #include "drivers/imu/xsens_mtdata2.hpp"
 
 namespace livod::daemon::devices {
@@ -78,10 +79,9 @@ std::unique_ptr<imu::StreamImuDecoder> make_serial_imu_decoder(const SerialConfi
     case SerialProtocol::xsens_mtdata2:
       return std::make_unique<imu::XsensMtData2Decoder>();
     case SerialProtocol::vectornav_binary:
-      break;
+      return std::make_unique<imu::VectorNavBinaryDecoder>();
   }
-  throw Error("sensor '" + sensor + "': serial protocol " +
-              std::string(enum_name(serial.protocol)) + " is not implemented (xsens_mtdata2 is)");
+  throw Error("sensor '" + sensor + "': unknown serial protocol");
 }
 
 }  // namespace livod::daemon::devices

@@ -16,7 +16,7 @@ namespace livod::daemon::devices {
 std::unique_ptr<imu::CanImuDecoder> make_can_imu_decoder(const CanConfig& can,
                                                          const std::string& sensor);
 
-// serial.protocol: xsens_mtdata2. vectornav_binary is rejected (livod does not decode it).
+// serial.protocol: xsens_mtdata2 (Xsens MTi), vectornav_binary (VectorNav VN-100/200/300).
 std::unique_ptr<imu::StreamImuDecoder> make_serial_imu_decoder(const SerialConfig& serial,
                                                                const std::string& sensor);
 

@@ -17,6 +17,7 @@ std::optional<ReplayFormat> format_of(const std::filesystem::path& path) {
   if (ext == ".pcap" || ext == ".pcapng") return ReplayFormat::pcap;
   if (ext == ".log" || ext == ".candump") return ReplayFormat::candump;
   if (ext == ".bag") return ReplayFormat::rosbag1;
+  if (ext == ".serial") return ReplayFormat::serial;
   return std::nullopt;
 }
 
@@ -34,6 +35,8 @@ bool takes(const SensorConfig& sensor, ReplayFormat format) {
     }
     case ReplayFormat::euroc:
       return sensor_kind(sensor.driver) == SensorKind::camera;
+    case ReplayFormat::serial:
+      return sensor.driver == Driver::serial_imu;
   }
   return false;
 }
@@ -85,7 +88,7 @@ std::vector<std::optional<SensorRecording>> assign_recordings(
     const auto format = format_of(path);
     if (!format) {
       throw Error("input '" + path.string() +
-                  "': unknown format (.pcap, .pcapng, .log, .candump, .bag or a folder)");
+                  "': unknown format (.pcap, .pcapng, .log, .candump, .bag, .serial or a folder)");
     }
     if (has_name) {
       const std::string name = input.substr(0, eq);

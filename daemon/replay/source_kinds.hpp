@@ -24,6 +24,12 @@ std::unique_ptr<ReplaySource> make_pcap_source(const std::filesystem::path& file
 std::unique_ptr<ReplaySource> make_candump_source(const std::filesystem::path& file,
                                                   const CanConfig& can, const std::string& sensor);
 
+// Reads of a livod serial capture (io/serial_capture.hpp) through the configured serial IMU
+// decoder (Xsens MTData2, VectorNav binary), the one the live serial source uses.
+std::unique_ptr<ReplaySource> make_serial_capture_source(const std::filesystem::path& file,
+                                                         const SerialConfig& serial,
+                                                         const std::string& sensor);
+
 // One topic of a ROS1 bag. The message type decides: sensor_msgs/Imu -> IMU samples;
 // sensor_msgs/PointCloud2, livox_ros_driver/CustomMsg -> scans; ouster_ros/PacketMsg -> the
 // packet decoder (`decoder` must then be given).

@@ -35,6 +35,9 @@ std::unique_ptr<ReplaySource> make_source(const SensorConfig& sensor,
         }
         return make_bag_source(replay.file, replay.topic, sensor, std::move(decoder));
       }
+      case ReplayFormat::serial:
+        if (sensor.driver != Driver::serial_imu) break;
+        return make_serial_capture_source(replay.file, sensor.serial, sensor.name);
       case ReplayFormat::euroc:
         // Cameras: an EuRoC/ASL camera folder or a plain image folder (image_sources.hpp).
         if (sensor_kind(sensor.driver) != SensorKind::camera) break;

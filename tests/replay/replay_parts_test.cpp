@@ -14,6 +14,7 @@
 #include "daemon/replay/cloud_conversion.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/map_accumulator.hpp"
+#include "daemon/replay/sources.hpp"
 #include "daemon/replay/timing_report.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
 #include "daemon/runtime/sensor_clock.hpp"
@@ -343,6 +344,45 @@ TEST(ReplayParts, InputsAreAssignedByNameOrFormat) {
   EXPECT_THROW(assign_recordings(config, {(dir / "new.bag").string()}), Error);
   // A bag for a sensor without a configured topic.
   EXPECT_THROW(assign_recordings(config, {"imu=" + (dir / "new.bag").string()}), Error);
+  // No serial IMU here: a bare serial capture has no sensor to go to.
+  std::ofstream(dir / "vn.serial") << "x";
+  EXPECT_THROW(assign_recordings(config, {(dir / "vn.serial").string()}), Error);
+}
+
+// A bare .serial goes to the serial IMU, whose source may be its live device.
+TEST(ReplayParts, SerialCapturesGoToTheSerialImu) {
+  const auto dir = test::temp_dir("replay_assign_serial");
+  std::ofstream(dir / "vn.serial") << "x";
+  const auto loaded = daemon::load_config_from_string(R"(
+body_frame: vn
+sensors:
+  - {name: vlp, driver: velodyne, model: VLP-16, source: {udp: {}},
+     extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}}
+  - {name: vn, driver: serial_imu, source: {device: {path: /dev/ttyUSB0}},
+     serial: {protocol: vectornav_binary}}
+)",
+                                                      "serial.yaml", dir);
+  const auto r = daemon::replay::assign_recordings(loaded.config, {(dir / "vn.serial").string()});
+  ASSERT_EQ(r.size(), 2U);
+  EXPECT_FALSE(r[0]);
+  ASSERT_TRUE(r[1]);
+  EXPECT_EQ(r[1]->replay.format, daemon::ReplayFormat::serial);
+  EXPECT_EQ(r[1]->replay.file, dir / "vn.serial");
+  EXPECT_TRUE(r[1]->from_command_line);
+  // The capture is read through the configured protocol's decoder; this one is not a capture.
+  EXPECT_THROW(daemon::replay::make_source(loaded.config.sensors[1], r[1]->replay, {}), Error);
+  // A serial capture configured for a LiDAR is refused by the loader.
+  const auto wrong = daemon::load_config_from_string(R"(
+body_frame: vn
+sensors:
+  - {name: vlp, driver: velodyne, model: VLP-16, source: {replay: {file: vn.serial}},
+     extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}}
+  - {name: vn, driver: serial_imu, source: {replay: {file: vn.serial}},
+     serial: {protocol: vectornav_binary}}
+)",
+                                                     "wrong.yaml", dir);
+  ASSERT_EQ(wrong.problems.size(), 1U);
+  EXPECT_EQ(wrong.problems[0].path, "sensors[0].source.replay.format");
 }
 
 TEST(ReplayParts, ClockMappingAddsTheOffsetOnceAndPrefersImu) {

@@ -14,6 +14,7 @@
 #include "drivers/imu/bosch_mm7.hpp"
 #include "drivers/imu/candump_frames.hpp"
 #include "drivers/imu/sbg_can.hpp"
+#include "drivers/imu/vectornav_binary.hpp"
 #include "drivers/imu/xsens_mtdata2.hpp"
 #include "drivers/lidar_family.hpp"
 #include "io/candump.hpp"
@@ -293,13 +294,24 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     for (std::int64_t k = 0; k < n_samples; ++k) {
       const double t = static_cast<double>(k) * period;
       const ImuTruth m = imu.measure(scene.imu_truth(t, mount.T_body_imu));
-      imu::XsensSample x;
-      x.packet_counter = static_cast<std::uint16_t>(k & 0xFFFF);
-      x.sample_time_fine = static_cast<std::uint32_t>(
-          static_cast<std::uint64_t>(clock.stamp_ns(t) / 100'000) & 0xFFFFFFFFULL);
-      x.accel_m_s2 = m.accel_m_s2;
-      x.gyro_rad_s = m.gyro_rad_s;
-      auto bytes = imu::encode_mtdata2_sample(x);
+      std::vector<std::uint8_t> bytes;
+      if (mount.protocol == SerialImuProtocol::kVectorNavBinary) {
+        // TimeStartup: ns of the sensor's clock, which does not run before its start.
+        imu::VectorNavSample v;
+        v.time_startup_ns =
+            static_cast<std::uint64_t>(std::max<std::int64_t>(0, clock.stamp_ns(t)));
+        v.accel_m_s2 = m.accel_m_s2;
+        v.gyro_rad_s = m.gyro_rad_s;
+        bytes = imu::encode_vectornav_sample(v);
+      } else {
+        imu::XsensSample x;
+        x.packet_counter = static_cast<std::uint16_t>(k & 0xFFFF);
+        x.sample_time_fine = static_cast<std::uint32_t>(
+            static_cast<std::uint64_t>(clock.stamp_ns(t) / 100'000) & 0xFFFFFFFFULL);
+        x.accel_m_s2 = m.accel_m_s2;
+        x.gyro_rad_s = m.gyro_rad_s;
+        bytes = imu::encode_mtdata2_sample(x);
+      }
       if (unit(wire) < mount.corrupt_probability) {
         // One flipped bit past the header: the checksum fails and the sample is lost.
         bytes[bytes.size() - 1 - wire() % (bytes.size() - 5)] ^=
@@ -432,8 +444,19 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
       if (imu.name != scenario.body_imu) write_extrinsic(cfg, imu.T_body_imu);
     }
     if (scenario.serial_imu) {
-      cfg << "  # " << scenario.serial_imu->name << ".serial: an Xsens MTi's serial stream (livod "
-          << "serial capture); livod replay does not read serial captures yet.\n";
+      const auto& imu = *scenario.serial_imu;
+      const bool xsens = imu.protocol == SerialImuProtocol::kXsensMtData2;
+      cfg << "  - name: " << imu.name
+          << "\n    driver: serial_imu\n    model: " << (xsens ? "MTi" : "VN-100") << "\n";
+      // The estimator takes one IMU: a serial IMU beside another body IMU stays in the file,
+      // disabled.
+      if (imu.name != scenario.body_imu) {
+        cfg << "    enabled: false  # not the body IMU (the estimator takes one IMU)\n";
+      }
+      cfg << "    source:\n      replay: {file: " << imu.name << ".serial}\n"
+          << "    serial: {protocol: " << (xsens ? "xsens_mtdata2" : "vectornav_binary")
+          << ", baud_rate: " << imu.baud_rate << "}\n";
+      if (imu.name != scenario.body_imu) write_extrinsic(cfg, imu.T_body_imu);
     }
     for (const auto& cam : scenario.cameras) {
       const auto& k = cam.params.intrinsics;

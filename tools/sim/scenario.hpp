@@ -52,14 +52,19 @@ struct CanImuMount {
   LinkFaults link;    // bus + driver latency to the host receive stamp
 };
 
-// An Xsens MTi on a serial line (MTData2 messages, float32, with PacketCounter, SampleTimeFine,
-// Acceleration, RateOfTurn, StatusWord), as the host reads it: in chunks that end anywhere, so
-// messages are torn across reads; optionally with corrupted messages and line noise.
+// The wire protocol of the serial IMU: an Xsens MTi's MTData2 (float32 PacketCounter,
+// SampleTimeFine, Acceleration, RateOfTurn, StatusWord) or a VectorNav VN-100's binary output
+// (Common group: TimeStartup, AngularRate, Accel; IMU group: SensSat).
+enum class SerialImuProtocol { kXsensMtData2, kVectorNavBinary };
+
+// An IMU on a serial line, as the host reads it: in chunks that end anywhere, so messages are
+// torn across reads; optionally with corrupted messages and line noise.
 struct SerialImuMount {
   std::string name = "serial_imu";
+  SerialImuProtocol protocol = SerialImuProtocol::kXsensMtData2;
   Eigen::Isometry3d T_body_imu = Eigen::Isometry3d::Identity();
   ImuNoiseParams noise = ImuNoiseParams{.rate_hz = 400.0};
-  ClockFaults clock;                 // of SampleTimeFine (10 kHz ticks)
+  ClockFaults clock;                 // of SampleTimeFine (10 kHz ticks) / TimeStartup (ns)
   int baud_rate = 921600;            // 10 bits per byte on the wire
   double read_latency_s = 1e-3;      // mean of the exponential host read latency (adapter + OS)
   std::size_t max_read_bytes = 64;   // reads return 1..max bytes (uniform)
@@ -77,8 +82,9 @@ struct Scenario {
   std::vector<LidarMount> lidars;
   std::vector<CameraMount> cameras;
   std::optional<CanImuMount> can_imu;
-  std::optional<SerialImuMount> serial_imu;  // not a body IMU candidate: not replayable yet
-  // Which IMU defines the body frame: "<lidar name>" (its internal IMU) or the CAN IMU's name.
+  std::optional<SerialImuMount> serial_imu;
+  // Which IMU defines the body frame: "<lidar name>" (its internal IMU), the CAN IMU's or the
+  // serial IMU's name.
   std::string body_imu;
   double groundtruth_rate_hz = 200.0;
 };

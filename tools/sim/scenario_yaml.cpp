@@ -22,8 +22,9 @@
 //   can_imu:                      # adds or changes the CAN IMU
 //     {name: can_imu, format: sbg | bosch_mm7, rate_hz: 100, translation: [0, 0, 0],
 //      rpy_deg: [0, 0, 0]}
-//   serial_imu:                   # adds an Xsens MTi on a serial line (decoder tests)
-//     {name: xsens, rate_hz: 400, baud_rate: 921600, max_read_bytes: 64, read_latency_s: 1e-3,
+//   serial_imu:                   # adds an IMU on a serial line (Xsens MTi or VectorNav VN-100)
+//     {name: xsens, protocol: xsens_mtdata2 | vectornav_binary, rate_hz: 400, baud_rate: 921600,
+//     max_read_bytes: 64, read_latency_s: 1e-3,
 //      corrupt_probability: 0.01, noise_probability: 0.01, clock: {offset_s: 3, skew_ppm: -30}}
 
 #include <yaml-cpp/yaml.h>
@@ -272,11 +273,21 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
   if (const auto c = root["serial_imu"]) {
     const std::string path = "scenario.serial_imu";
     check_keys(c,
-               {"name", "rate_hz", "baud_rate", "max_read_bytes", "read_latency_s",
+               {"name", "protocol", "rate_hz", "baud_rate", "max_read_bytes", "read_latency_s",
                 "corrupt_probability", "noise_probability", "clock", "translation", "rpy_deg"},
                path, p);
     SerialImuMount m = s.serial_imu.value_or(SerialImuMount{});
     read(c, "name", m.name, path, p);
+    std::string protocol =
+        m.protocol == SerialImuProtocol::kXsensMtData2 ? "xsens_mtdata2" : "vectornav_binary";
+    read(c, "protocol", protocol, path, p);
+    if (protocol == "xsens_mtdata2") {
+      m.protocol = SerialImuProtocol::kXsensMtData2;
+    } else if (protocol == "vectornav_binary") {
+      m.protocol = SerialImuProtocol::kVectorNavBinary;
+    } else {
+      p.add(c["protocol"], path + ".protocol", "expected xsens_mtdata2 or vectornav_binary");
+    }
     read(c, "rate_hz", m.noise.rate_hz, path, p);
     read(c, "baud_rate", m.baud_rate, path, p);
     read(c, "max_read_bytes", m.max_read_bytes, path, p);
@@ -303,10 +314,6 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
     read_pose(c, path, m.T_body_imu, p);
     s.serial_imu = m;
   }
-  if (s.serial_imu && s.serial_imu->name == s.body_imu) {
-    p.add(root["body_imu"], "scenario.body_imu",
-          "the serial IMU cannot be the body IMU (livod replay does not read serial captures yet)");
-  }
   if (s.name.empty()) p.add(root, "scenario.name", "required (or give a base)");
   if (!(std::isfinite(s.duration_s) && s.duration_s > 0.0 && s.duration_s <= 3600.0)) {
     p.add(root["duration_s"], "scenario.duration_s", "must be a number of seconds in (0, 3600]");
@@ -314,7 +321,9 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
   bool body_found = s.can_imu && s.can_imu->name == s.body_imu;
   for (const auto& l : s.lidars) body_found = body_found || l.name == s.body_imu;
   body_found = body_found || (s.serial_imu && s.serial_imu->name == s.body_imu);
-  if (!body_found) p.add(root["body_imu"], "scenario.body_imu", "must name a LiDAR or the CAN IMU");
+  if (!body_found)
+    p.add(root["body_imu"], "scenario.body_imu",
+          "must name a LiDAR, the CAN IMU or the serial IMU");
   if (!p.empty()) throw Error(file.string() + ": invalid scenario:" + p.text());
   return s;
 }

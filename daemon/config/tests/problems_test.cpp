@@ -743,13 +743,12 @@ sensors:
 )";
   EXPECT_EQ(not_implemented(live_can), std::vector<std::string>{"sensors[1].source"});
 
-  // The serial IMU drivers exist (drivers/imu), but neither `livod run` nor `livod replay` can
-  // feed one to the estimator yet.
+  // A live serial IMU is refused like the other live devices (its serial capture replays).
   std::string live_serial = live_can;
   live_serial.replace(live_serial.find("    driver: can_imu"), std::string::npos,
                       "    driver: serial_imu\n    source: {device: {path: /dev/ttyUSB0}}\n"
                       "    serial: {protocol: xsens_mtdata2}\n");
-  EXPECT_EQ(not_implemented(live_serial), std::vector<std::string>{"sensors[1].driver"});
+  EXPECT_EQ(not_implemented(live_serial), std::vector<std::string>{"sensors[1].source"});
 }
 
 }  // namespace

@@ -38,8 +38,8 @@ void check_config(const Scenario& scenario) {
   ASSERT_TRUE(result.ok());
   const daemon::LivodConfig& config = result.config;
 
-  std::size_t expected =
-      scenario.lidars.size() + scenario.cameras.size() + (scenario.can_imu ? 1u : 0u);
+  std::size_t expected = scenario.lidars.size() + scenario.cameras.size() +
+                         (scenario.can_imu ? 1u : 0u) + (scenario.serial_imu ? 1u : 0u);
   ASSERT_EQ(config.sensors.size(), expected);
   ASSERT_GE(config.body_sensor_index, 0);
   const auto& body = config.sensors[static_cast<std::size_t>(config.body_sensor_index)];
@@ -72,6 +72,23 @@ void check_config(const Scenario& scenario) {
     EXPECT_EQ(replay->format, daemon::ReplayFormat::candump);
     EXPECT_TRUE(std::filesystem::exists(replay->file)) << replay->file;
     expect_pose_near(s->T_body_sensor, scenario.can_imu->T_body_imu, s->name);
+  }
+  if (scenario.serial_imu) {
+    const auto& mount = *scenario.serial_imu;
+    const auto* s = config.find_sensor(mount.name);
+    ASSERT_NE(s, nullptr);
+    EXPECT_EQ(s->driver, daemon::Driver::serial_imu);
+    EXPECT_EQ(s->serial.protocol, mount.protocol == SerialImuProtocol::kXsensMtData2
+                                      ? daemon::SerialProtocol::xsens_mtdata2
+                                      : daemon::SerialProtocol::vectornav_binary);
+    EXPECT_EQ(s->serial.baud_rate, mount.baud_rate);
+    // The estimator takes one IMU: a serial IMU that is not the body is written disabled.
+    EXPECT_EQ(s->enabled, mount.name == scenario.body_imu);
+    const auto* replay = std::get_if<daemon::ReplaySourceConfig>(&s->source);
+    ASSERT_NE(replay, nullptr);
+    EXPECT_EQ(replay->format, daemon::ReplayFormat::serial);
+    EXPECT_TRUE(std::filesystem::exists(replay->file)) << replay->file;
+    expect_pose_near(s->T_body_sensor, mount.T_body_imu, s->name);
   }
   for (const auto& cam : scenario.cameras) {
     const auto* s = config.find_sensor(cam.name);
@@ -118,10 +135,18 @@ TEST(RunnerConfig, CanImuBodyConfigIsAccepted) {
   }
   ASSERT_FALSE(s.lidars[0].imu);
   check_config(s);
-  // The same with a Bosch MM7 on the bus, and an Xsens on a serial line beside it (its capture is
-  // written, not configured: livod replay does not read serial captures yet).
+  // The same with a Bosch MM7 on the bus, and an Xsens on a serial line beside it (configured,
+  // disabled: the estimator takes one IMU).
   s.can_imu->format = CanImuFormat::kBoschMm7;
   s.serial_imu = SerialImuMount{};
+  s.serial_imu->T_body_imu.translation() = Eigen::Vector3d(0.1, -0.05, 0.2);
+  check_config(s);
+  // The serial IMU as the body (the body frame is its frame), Xsens and VectorNav.
+  s.can_imu.reset();
+  s.body_imu = s.serial_imu->name;
+  s.serial_imu->T_body_imu = Eigen::Isometry3d::Identity();
+  check_config(s);
+  s.serial_imu->protocol = SerialImuProtocol::kVectorNavBinary;
   check_config(s);
 }
 
