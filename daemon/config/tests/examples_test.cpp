@@ -63,7 +63,7 @@ TEST(ConfigExamples, EveryExampleLoadsWithoutErrors) {
 
 TEST(ConfigExamples, PlannedExamplesFailOnlyForWhatIsNotImplemented) {
   const auto planned = yaml_files({repository_root() / "docs" / "examples" / "planned"});
-  EXPECT_GE(planned.size(), 4u);
+  EXPECT_GE(planned.size(), 1u);
   for (const auto& file : planned) {
     SCOPED_TRACE(file.string());
     const auto result = load_config(file);
