@@ -32,6 +32,8 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <numbers>
+#include <optional>
 #include <thread>
 
 #include "core/so3.hpp"
@@ -358,6 +360,204 @@ TEST(DaemonDevices, XsensOnASerialLineIsTheBodyImuOfALiveLidar) {
   EXPECT_LE(live_eval.ape.rmse, 0.001 * path);
   EXPECT_LE(live_eval.ape.rmse, 2.0 * replay_eval.ape.rmse + 0.01);
   EXPECT_GT(bus.imu_poses, 1000u);
+}
+
+// ---- GigE Vision camera + UDP LiDAR ----------------------------------------------------------
+
+constexpr const char* kFakeCameraId = "Aravis-Fake-GV01";
+
+// Aravis's GigE Vision camera simulator as a child process (in this process's network namespace).
+class FakeGvCamera {
+ public:
+  FakeGvCamera() { start(); }
+  ~FakeGvCamera() { kill(); }
+  FakeGvCamera(const FakeGvCamera&) = delete;
+  FakeGvCamera& operator=(const FakeGvCamera&) = delete;
+  void start() {
+    std::vector<const char*> argv{
+        "arv-fake-gv-camera-0.8", "-i", "127.0.0.1", "-s", "GV01", nullptr};
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+    const int rc = posix_spawnp(&pid_, argv[0], &actions, nullptr,
+                                const_cast<char* const*>(argv.data()), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ASSERT_EQ(rc, 0) << "cannot start arv-fake-gv-camera-0.8 (aravis-tools installed?)";
+  }
+  void kill() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+
+ private:
+  pid_t pid_ = -1;
+};
+
+// Live poses on the recording's timeline (live time minus `shift_ns`), as a trajectory.
+eval::Trajectory on_recording_time(const std::vector<PoseRecord>& poses, std::int64_t shift_ns) {
+  eval::Trajectory est;
+  for (const auto& p : poses) {
+    if (p.status == PoseStatus::kSensorStale) continue;
+    est.stamps_s.push_back(static_cast<double>(p.t.ns - shift_ns) * 1e-9);
+    est.poses.push_back(RigidTransform3d{p.R_world_body, p.p_world_body});
+  }
+  return est;
+}
+
+class DaemonCamera : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    // A private network namespace with only a loopback interface: GVCP discovery broadcasts, the
+    // GVSP stream and the LiDAR's UDP stay inside it. Threads created afterwards inherit it.
+    ASSERT_EQ(::unshare(CLONE_NEWNET), 0) << "unshare(CLONE_NEWNET): " << std::strerror(errno);
+    const int s = ::socket(AF_INET, SOCK_DGRAM, 0);
+    ifreq ifr{};
+    std::strncpy(ifr.ifr_name, "lo", IFNAMSIZ - 1);
+    ASSERT_EQ(::ioctl(s, SIOCGIFFLAGS, &ifr), 0);
+    ifr.ifr_flags = static_cast<short>(ifr.ifr_flags | IFF_UP);
+    ASSERT_EQ(::ioctl(s, SIOCSIFFLAGS, &ifr), 0);
+    ::close(s);
+  }
+};
+
+TEST_F(DaemonCamera, AGigECameraFeedsTheVisualUpdateAndComesBackAfterItIsKilled) {
+  const sim::Scenario scenario = sim::make_scenario("room_handheld_os1_64");
+  const auto folder = test::simulate(scenario, 14.0, "live-gige");
+  // LiDAR-inertial replay of the same capture: what the LIO poses must stay close to.
+  const auto replayed = test::replay(folder / "config.yaml", test::temp_dir("live-gige-replay"));
+  const auto trajectory = eval::read_tum(replayed.trajectory);
+
+  // The simulated rig plus a live GigE camera looking forward, its visual update on.
+  std::string yaml = test::read_file(folder / "config.yaml");
+  // A run is live or a replay: the LiDAR goes live too (its ports are set below).
+  const std::string replayed_lidar = "replay: {file: os1.pcap}";
+  ASSERT_NE(yaml.find(replayed_lidar), std::string::npos);
+  yaml.replace(yaml.find(replayed_lidar), replayed_lidar.size(),
+               "udp: {bind_address: 127.0.0.1, sensor_address: 127.0.0.1}");
+  const auto outputs = yaml.find("\noutputs:");
+  ASSERT_NE(outputs, std::string::npos);
+  yaml.insert(outputs + 1, std::string(R"(  - name: gige
+    driver: aravis
+    model: Aravis-Fake
+    source: {device: {camera_id: )") +
+                               kFakeCameraId + R"(}}
+    camera: {width: 640, height: 480, intrinsics: [400, 400, 320, 240], pixel_format: mono8,
+             frame_rate_hz: 20, exposure_s: 0.004, buffers: 8}
+    extrinsic: {translation: [0.05, 0, 0], rotation: {matrix: [0, 0, 1, -1, 0, 0, 0, -1, 0]}}
+)");
+  const auto loaded =
+      daemon::load_config_from_string(yaml, (folder / "live.yaml").string(), folder);
+  for (const auto& p : loaded.problems) {
+    EXPECT_NE(p.severity, daemon::Severity::error) << daemon::format_problem(loaded.source, p);
+  }
+  daemon::LivodConfig config = loaded.config;
+  ASSERT_TRUE(config.estimator.vio.enabled);
+  make_lidars_live(config);
+
+  FakeGvCamera camera;
+  RecordingBus bus;
+  std::stop_source stop;
+  std::thread sender;
+  std::thread power;
+  std::int64_t send_start_ns = 0;
+  std::int64_t first_record_ns = 0;
+  daemon::runtime::DaemonOptions options;
+  options.bus = &bus;
+  options.ephemeral_ports = true;
+  options.stop = stop.get_token();
+  options.max_queued_scans = 50;
+  options.on_ready = [&](const std::vector<std::pair<std::string, std::uint16_t>>& ports) {
+    const auto routes = routes_for(config, ports);
+    first_record_ns = first_routed_ns(folder / "os1.pcap", routes);
+    sender = std::thread([&, routes] {
+      send_start_ns = host_now().ns;
+      test::send_capture(folder / "os1.pcap", routes);
+      std::this_thread::sleep_for(1s);
+      stop.request_stop();
+    });
+    power = std::thread([&] {
+      // The camera dies 5 s into the stream and is started again 3 s later.
+      std::this_thread::sleep_for(5s);
+      camera.kill();
+      std::this_thread::sleep_for(3s);
+      camera.start();
+    });
+  };
+  const auto result = daemon::runtime::run_daemon(config, options);
+  if (sender.joinable()) sender.join();
+  if (power.joinable()) power.join();
+  ASSERT_EQ(result.exit_code, 0) << (result.errors.empty() ? "" : result.errors[0]);
+  for (const auto& s : result.sensor_summaries) std::printf("[live-gige] %s\n", s.c_str());
+  const auto& e = result.estimator;
+  std::printf(
+      "[live-gige] images in %llu (late %llu, dropped %llu, rejected %llu), image groups %llu, "
+      "VIO updates %llu; scans %llu\n",
+      static_cast<unsigned long long>(e.images_in), static_cast<unsigned long long>(e.images_late),
+      static_cast<unsigned long long>(e.images_dropped),
+      static_cast<unsigned long long>(e.images_rejected),
+      static_cast<unsigned long long>(e.image_groups),
+      static_cast<unsigned long long>(e.vio_updates),
+      static_cast<unsigned long long>(e.scans_processed));
+
+  // Frames reached the estimator, on its timeline: image groups ran (LIO then VIO at the image
+  // time), nothing was rejected for its size or format.
+  EXPECT_GE(e.images_in, 60u);
+  EXPECT_GE(e.image_groups, 30u);
+  EXPECT_EQ(e.images_rejected, 0u);
+  EXPECT_LT(e.images_late + e.images_dropped, e.images_in / 4);
+
+  // Health: the camera streamed, went STALE while killed, came back (reconnected), through its
+  // own clock domain (the camera's tick counter, free-running).
+  const auto states = states_of(bus.health, "gige");
+  const auto stale = std::find(states.begin(), states.end(), SensorState::kStale);
+  ASSERT_NE(stale, states.end());
+  EXPECT_NE(std::find(states.begin(), stale, SensorState::kStreaming), stale);
+  EXPECT_NE(std::find(stale, states.end(), SensorState::kStreaming), states.end());
+  const HealthRecord* streaming = nullptr;
+  for (const auto& h : bus.health) {
+    const auto* s = sensor_of(h, "gige");
+    if (s != nullptr && s->state == SensorState::kStreaming) streaming = &h;
+  }
+  ASSERT_NE(streaming, nullptr);
+  const auto* cam = sensor_of(*streaming, "gige");
+  EXPECT_EQ(cam->kind, "aravis");
+  EXPECT_EQ(cam->clock_mode, "free_running");
+  EXPECT_GT(cam->packets_per_s, 5.0);
+  EXPECT_GE(sensor_of(bus.health.back(), "gige")->reconnects, 1u);
+  EXPECT_NE(daemon::runtime::service_status_line(*streaming, nullptr).find("gige STREAMING"),
+            std::string::npos);
+  const bool watched =
+      std::any_of(streaming->threads.begin(), streaming->threads.end(),
+                  [](const auto& t) { return t.name.find("gige.frames") != std::string::npos; });
+  EXPECT_TRUE(watched);
+
+  // Poses (scan ends and image times) in time order, each published soon after its time: the
+  // image times are on the host timeline.
+  ASSERT_GT(test::real_poses(bus.poses), replayed.summary.frames / 2);
+  for (std::size_t i = 0; i < bus.poses.size(); ++i) {
+    const auto& p = bus.poses[i];
+    if (p.status == PoseStatus::kSensorStale) continue;
+    const std::int64_t age = bus.published_ns[i] - p.t.ns;
+    EXPECT_GE(age, 0) << i;
+    EXPECT_LT(age, 1'000'000'000) << i;
+    if (i > 0 && bus.poses[i - 1].status != PoseStatus::kSensorStale) {
+      EXPECT_GT(p.t, bus.poses[i - 1].t) << i;
+    }
+  }
+  // LIO is as accurate as in the LiDAR-only replay: the fake camera's pattern did not pull the
+  // state away (live poses on the recording's timeline: live time minus the time the sender
+  // played the capture's first datagram at).
+  const auto gt = eval::read_tum(folder / "groundtruth.txt");
+  const auto live_eval = eval::evaluate(
+      gt, on_recording_time(bus.poses, send_start_ns - first_record_ns), eval::EvalOptions{});
+  const auto replay_eval = test::evaluate(replayed.trajectory, folder / "groundtruth.txt");
+  std::printf("[live-gige] ATE rmse: live LIVO %.1f mm (%zu poses), LiDAR-only replay %.1f mm\n",
+              1e3 * live_eval.ape.rmse, live_eval.ape_m.size(), 1e3 * replay_eval.ape.rmse);
+  EXPECT_GE(live_eval.ape_m.size(), replayed.summary.frames / 2);
+  EXPECT_LE(live_eval.ape.rmse, 2.0 * replay_eval.ape.rmse + 0.01);
 }
 
 }  // namespace
