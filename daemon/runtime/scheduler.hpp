@@ -17,8 +17,11 @@
 // body is an internal IMU ("<lidar>.imu"), else the first enabled LiDAR. T_imu_lidar is that
 // LiDAR's T_body_sensor. With estimator.vio.enabled it also takes the first enabled camera, whose
 // frames go through that camera's clock domain into the visual update (LIO then VIO at the image
-// time, estimator/sync); T_imu_cam is its T_body_sensor. The LiDAR's internal IMU, when enabled,
-// feeds its clock domain even when it is not the body IMU.
+// time, estimator/sync); T_imu_cam is its T_body_sensor. A live camera's frames arrive already on
+// the common timeline and decimated (MeasurementSource::delivers_mapped_images: the camera driver's
+// clock maps them to mid-exposure) and go to the estimator as they are. The body IMU may be a
+// LiDAR's internal IMU or an external one (CAN, serial: live or replayed). The LiDAR's internal
+// IMU, when enabled, feeds its clock domain even when it is not the body IMU.
 
 #include <cstddef>
 #include <cstdint>
