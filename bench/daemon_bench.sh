@@ -13,7 +13,9 @@
 #                                               pace: the daemon's RSS every minute (needs ~200 MB
 #                                               of $TMPDIR per minute for the capture)
 #
-# BUILD_DIR defaults to build/release and needs the targets livod and pcap_udp_sender.
+# BUILD_DIR defaults to build/release and needs the targets livod and pcap_udp_sender. The daemon
+# runs with the shipped service configuration's SCHED_FIFO priorities (capture 50, scheduler 40;
+# needs root or RLIMIT_RTPRIO, else the refusal is logged); REALTIME=0 runs it without.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-latency}
@@ -48,6 +50,11 @@ outputs:
   timing_report: $sim/timing.txt
 health: {period_s: 1.0}
 EOF
+  # The shipped service configuration's real-time settings (systemd/livod.example.yaml), as on a
+  # robot; REALTIME=0 measures normal scheduling.
+  if [ "${REALTIME:-1}" != 0 ]; then
+    echo "realtime: {capture_priority: 50, scheduler_priority: 40}" >> "$sim/live.yaml"
+  fi
   if [ -n "$estimator" ]; then echo "estimator: $estimator" >> "$sim/live.yaml"; fi
 }
 

@@ -156,11 +156,19 @@ PipelineCounters LioPipeline::counters() const {
 std::size_t LioPipeline::process(const std::function<void(const PipelineOutput&)>& on_output,
                                  std::size_t max_groups) {
   std::size_t done = 0;
-  while (done < max_groups && sync_.next(group_)) {
-    process_group(group_, on_output);
+  while (done < max_groups && take_group()) {
+    process_taken(on_output);
     ++done;
   }
   return done;
+}
+
+bool LioPipeline::take_group() {
+  return sync_.next(group_);
+}
+
+void LioPipeline::process_taken(const std::function<void(const PipelineOutput&)>& on_output) {
+  process_group(group_, on_output);
 }
 
 void LioPipeline::propagate_to(const MeasurementGroup& group, ImuPoseTrack& track) {

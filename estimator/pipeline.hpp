@@ -138,6 +138,13 @@ class LioPipeline {
   // between); returns how many ran.
   std::size_t process(const std::function<void(const PipelineOutput&)>& on_output,
                       std::size_t max_groups = SIZE_MAX);
+  // process() in two steps, for a caller that runs the update on another thread while it keeps
+  // receiving (the daemon): take_group() moves the next due group out of the measurement queues
+  // (cheap) and process_taken() runs it. Between take_group() returning true and the end of
+  // process_taken() the caller makes no other call: the update owns the whole pipeline.
+  // process(f, n) is exactly n rounds of both.
+  bool take_group();
+  void process_taken(const std::function<void(const PipelineOutput&)>& on_output);
   // Scans queued for the estimator (waiting for IMU data or for their turn).
   [[nodiscard]] std::size_t queued_scans() const { return sync_.queued_scans(); }
   [[nodiscard]] std::size_t queued_imu() const { return sync_.queued_imu(); }

@@ -184,6 +184,9 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   po.map_cell_m = options.map_cell_m;
   po.map_max_points = options.map_max_points;
   po.publish_cloud = options.bus != nullptr && lcm.publish_cloud;
+  if (config.realtime.scheduler_priority > 0) {
+    po.priority = std::max(1, config.realtime.scheduler_priority - 1);
+  }
   // systemd: a no-op unless asked for and NOTIFY_SOCKET is set.
   ServiceNotifier notifier =
       options.notify_systemd
@@ -210,9 +213,21 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
 
   const int threads = options.threads >= 0 ? options.threads : config.estimator.threads;
   WorkerPool pool(threads > 0 ? threads : WorkerPool::hardware_threads());
+  std::optional<int> priority;
+  if (config.realtime.scheduler_priority > 0) priority = config.realtime.scheduler_priority;
+  std::optional<int> cpu;
+  if (config.realtime.scheduler_cpu >= 0) cpu = config.realtime.scheduler_cpu;
   SchedulerOptions so;
   so.max_groups_per_step = 1;
   so.max_queued_scans = options.max_queued_scans;
+  // The filter update runs on its own thread so that the scheduler thread keeps publishing
+  // IMU-rate poses during a scan update (update_thread.hpp). Under SCHED_FIFO the IMU-rate pose's
+  // path (capture, scheduler, then publisher one below it) preempts the update thread (two
+  // below the scheduler) whenever an IMU packet arrives.
+  so.update_thread = true;
+  so.update_doorbell = &wake;
+  if (priority) so.update_thread_options.priority = std::max(1, *priority - 2);
+  so.update_thread_options.cpu = cpu;
   Scheduler scheduler(config, std::move(opened.inputs), &pool, outputs, so);
 
   Publisher publisher(channels, options.bus, po);
@@ -221,6 +236,8 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   publisher.watch("publisher", [&publisher] { return publisher.heartbeat().beats(); });
   for (auto& t : source_threads) publisher.watch(t.name, t.beats);
   notifier.watch("scheduler", [&scheduler_beat] { return scheduler_beat.beats(); });
+  publisher.watch("update", [&scheduler] { return scheduler.update_beats(); });
+  notifier.watch("update", [&scheduler] { return scheduler.update_beats(); });
   notifier.watch("publisher", [&publisher] { return publisher.heartbeat().beats(); });
   for (auto& t : source_threads) notifier.watch(t.name, t.beats);
   publisher.start();
@@ -230,10 +247,6 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   std::atomic<bool> scheduler_done{false};
   std::string scheduler_error;
   std::string end_reason;
-  std::optional<int> priority;
-  if (config.realtime.scheduler_priority > 0) priority = config.realtime.scheduler_priority;
-  std::optional<int> cpu;
-  if (config.realtime.scheduler_cpu >= 0) cpu = config.realtime.scheduler_cpu;
 
   std::jthread scheduler_thread([&](const std::stop_token& stop) {
     if (const auto refused = apply_thread_scheduling("livod-sched", priority, cpu);

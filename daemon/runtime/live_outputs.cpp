@@ -139,13 +139,14 @@ void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {
     }
   }
 
-  const auto& pipeline = scheduler.pipeline();
-  const auto c = pipeline.counters();
+  // Not scheduler.pipeline(): an update may be running on the update thread.
+  const EstimatorStatus& est = scheduler.estimator_status();
+  const auto& c = est.counters;
   auto& e = h->estimator;
-  e.status = !pipeline.initialised() ? PoseStatus::kInitialising
-             : lidar_stale           ? PoseStatus::kSensorStale
-                                     : status_;
-  e.init_status = pipeline.initialised() ? std::string() : pipeline.init_status();
+  e.status = !est.initialised ? PoseStatus::kInitialising
+             : lidar_stale    ? PoseStatus::kSensorStale
+                              : status_;
+  e.init_status = est.init_status;
   e.frame_time_p50_ms = percentile(frame_ms_.data(), frame_ms_count_, 0.50);
   e.frame_time_p99_ms = percentile(frame_ms_.data(), frame_ms_count_, 0.99);
   e.frame_time_max_ms =
@@ -156,12 +157,12 @@ void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {
   frame_ms_count_ = 0;
   e.scans_in = c.scans_in;
   e.scans_processed = c.scans_processed;
-  e.scan_queue_depth = static_cast<std::uint32_t>(pipeline.queued_scans());
-  e.imu_queue_depth = static_cast<std::uint32_t>(pipeline.queued_imu());
-  e.scans_dropped_queue = c.scans_queue_overflow;
+  e.scan_queue_depth = static_cast<std::uint32_t>(est.queued_scans);
+  e.imu_queue_depth = static_cast<std::uint32_t>(est.queued_imu);
+  e.scans_dropped_queue = c.scans_queue_overflow + est.held_scans_dropped;
   e.scans_out_of_order = c.scans_out_of_order;
   e.scans_before_init = c.scans_before_init;
-  e.imu_dropped_queue = c.imu_queue_overflow;
+  e.imu_dropped_queue = c.imu_queue_overflow + est.held_imu_dropped;
   e.imu_out_of_order = c.imu_out_of_order;
   e.frames_without_update = c.frames_without_update;
   e.degenerate_frames = c.degenerate_frames;

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "core/error.hpp"
+#include "daemon/runtime/thread_scheduling.hpp"
 #include "io/output_file.hpp"
 
 namespace livod::daemon::runtime {
@@ -58,6 +59,11 @@ void Publisher::start() {
 }
 
 void Publisher::run(const std::stop_token& stop) {
+  if (const auto refused =
+          apply_thread_scheduling("livod-publish", options_.priority, options_.cpu);
+      !refused.empty()) {
+    spdlog::warn("publisher thread: {}", refused);
+  }
   while (!stop.stop_requested()) {
     heartbeat_.beat();
     const std::uint32_t token = channels_.doorbell.prepare();
@@ -65,7 +71,7 @@ void Publisher::run(const std::stop_token& stop) {
   }
 }
 
-bool Publisher::drain() {
+bool Publisher::publish_imu_poses() {
   bool any = false;
   while (ImuPoseRecord* p = channels_.imu_poses.next()) {
     any = true;
@@ -76,6 +82,11 @@ bool Publisher::drain() {
     ++stats_.imu_poses;
     channels_.imu_poses.release(p);
   }
+  return any;
+}
+
+bool Publisher::drain() {
+  bool any = publish_imu_poses();
   while (FrameRecord* f = channels_.frames.next()) {
     any = true;
     on_frame(*f);
@@ -122,8 +133,11 @@ void Publisher::on_frame(FrameRecord& f) {
     }
   }
   if (map_) {
+    // Up to 131 k points per frame: IMU-rate poses that arrive meanwhile go out between slices.
+    constexpr std::size_t kSlice = 3 * 8192;
     for (std::size_t i = 0; i + 2 < f.xyz_world.size(); i += 3) {
       map_->add(Eigen::Vector3d(f.xyz_world[i], f.xyz_world[i + 1], f.xyz_world[i + 2]));
+      if (i % kSlice == 0) publish_imu_poses();
     }
   }
 }

@@ -59,6 +59,10 @@ struct PublisherOptions {
   // Called on the publisher thread with each health record once it is complete (the daemon
   // derives the systemd STATUS= line from it); may be empty.
   std::function<void(const HealthRecord&)> on_health;
+  // SCHED_FIFO priority and CPU of the publisher thread (a refusal is logged): it is the last hop
+  // of the IMU-rate pose, which must not wait behind other processes for a core.
+  std::optional<int> priority;
+  std::optional<int> cpu;
 };
 
 struct PublisherStats {
@@ -97,6 +101,8 @@ class Publisher {
   void run(const std::stop_token& stop);
   // Takes everything queued; returns whether anything was.
   bool drain();
+  // Publishes the queued IMU-rate poses; also called between slices of a frame's longer work.
+  bool publish_imu_poses();
   void on_frame(FrameRecord& f);
   void on_health(HealthRecord& h);
   void log_health(const HealthRecord& h);

@@ -13,6 +13,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Body-IMU samples held during one update: 8 s at 1 kHz (an update never takes that long unless
+// the machine is starved; beyond it the oldest are dropped and counted).
+constexpr std::size_t kHeldImuMax = 8192;
+
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -116,9 +120,94 @@ Scheduler::Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
   pipeline_ = std::make_unique<estimator::LioPipeline>(po);
   want_imu_poses_ = sink_.wants_imu_poses();
   build_sensors(std::move(inputs));
+  if (options_.update_thread) {
+    held_.reserve(kHeldImuMax + options_.max_queued_scans + 8);
+    update_thread_ = std::make_unique<UpdateThread>(
+        [this] { run_update(); }, options_.update_doorbell, options_.update_thread_options);
+  }
+  refresh_status();
 }
 
-Scheduler::~Scheduler() = default;
+// Stops the update thread before the pipeline it may be running goes.
+Scheduler::~Scheduler() {
+  update_thread_.reset();
+}
+
+void Scheduler::to_estimator(const ImuSample& m) {
+  if (!update_thread_ || !update_thread_->busy()) {
+    pipeline_->add_imu(m);
+    return;
+  }
+  if (held_imu_ >= kHeldImuMax) {
+    const auto it = std::find_if(held_.begin(), held_.end(), [](const auto& v) {
+      return std::holds_alternative<ImuSample>(v);
+    });
+    held_.erase(it);
+    --held_imu_;
+    ++status_.held_imu_dropped;
+  }
+  held_.emplace_back(m);
+  ++held_imu_;
+}
+
+void Scheduler::to_estimator(LidarScan scan) {
+  if (!update_thread_ || !update_thread_->busy()) {
+    pipeline_->add_scan(std::move(scan));
+    return;
+  }
+  if (held_scans_ >= std::max<std::size_t>(1, options_.max_queued_scans)) {
+    const auto it = std::find_if(held_.begin(), held_.end(), [](const auto& v) {
+      return std::holds_alternative<LidarScan>(v);
+    });
+    held_.erase(it);
+    --held_scans_;
+    ++status_.held_scans_dropped;
+  }
+  held_.emplace_back(std::move(scan));
+  ++held_scans_;
+}
+
+void Scheduler::to_estimator(ImageFrame frame) {
+  if (!update_thread_ || !update_thread_->busy()) {
+    pipeline_->add_image(std::move(frame));
+    return;
+  }
+  held_.emplace_back(std::move(frame));
+}
+
+void Scheduler::release_held() {
+  for (auto& v : held_) {
+    if (auto* imu = std::get_if<ImuSample>(&v)) {
+      pipeline_->add_imu(*imu);
+    } else if (auto* scan = std::get_if<LidarScan>(&v)) {
+      pipeline_->add_scan(std::move(*scan));
+    } else {
+      pipeline_->add_image(std::move(std::get<ImageFrame>(v)));
+    }
+  }
+  held_.clear();
+  held_scans_ = 0;
+  held_imu_ = 0;
+}
+
+void Scheduler::refresh_status() {
+  status_.initialised = pipeline_->initialised();
+  status_.init_status = status_.initialised ? std::string() : pipeline_->init_status();
+  status_.counters = pipeline_->counters();
+  status_.queued_scans = pipeline_->queued_scans();
+  status_.queued_imu = pipeline_->queued_imu();
+}
+
+const EstimatorStatus& Scheduler::estimator_status() {
+  if (!update_thread_ || !update_thread_->busy()) refresh_status();
+  EstimatorStatus& s = status_;
+  // What waits for the running update is queued too.
+  if (update_thread_ && update_thread_->busy()) {
+    s.queued_scans = held_scans_;
+    s.queued_imu = held_imu_;
+  }
+  return s;
+}
 
 void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
   const auto body = static_cast<std::size_t>(roles_.body_imu);
@@ -162,7 +251,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
       ++self->imu_samples;
       if (!self->imu_to_estimator) return;
       last_body_imu_ = m;
-      pipeline_->add_imu(m);
+      to_estimator(m);
       if (!want_imu_poses_) return;
       if (const auto pose = predictor_.add(m)) {
         const auto t0 = Clock::now();
@@ -177,7 +266,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
       LidarScan copy = scan;
       self->clock->map_scan(copy);
       ++self->scans;
-      pipeline_->add_scan(std::move(copy));
+      to_estimator(std::move(copy));
     };
     r->sinks.on_image = [this, self](const ImageFrame& image) {
       if (!self->images_to_estimator) return;
@@ -185,7 +274,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
         // A live camera: mapped by its own clock domain and decimated by its capture thread.
         ++self->images_seen;
         ++self->images;
-        pipeline_->add_image(image);
+        to_estimator(ImageFrame(image));  // shares the pixels: the source made them for it
         return;
       }
       // camera.decimation keeps every n-th frame (FAST-LIVO2 hilti_en: 4).
@@ -195,7 +284,7 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
       ImageFrame frame = image;  // shares the pixels: the source made them for this frame
       self->clock->map_image(frame);
       ++self->images;
-      pipeline_->add_image(std::move(frame));
+      to_estimator(std::move(frame));
     };
     sensors_.push_back(std::move(r));
   }
@@ -235,13 +324,63 @@ bool Scheduler::step() {
   return true;
 }
 
+void Scheduler::emit_frame(const estimator::PipelineOutput& out, std::int64_t rx_ns, double cpu_s) {
+  predictor_.reset(out.t, estimator::Belief{out.x, out.P});
+  sink_.on_frame(FrameOutput{out, stats_.frames, rx_ns, 1e3 * cpu_s, last_body_imu_.gyro_rad_s,
+                             last_body_imu_.accel_m_s2});
+  ++stats_.frames;
+  last_frame_t_ = out.t;
+  last_frame_ms_ = out.report.timings.total_ms;
+}
+
+void Scheduler::run_update() {
+  const auto t0 = Clock::now();
+  const double cpu0 = process_cpu_s();
+  update_out_.reset();
+  pipeline_->process_taken([this](const estimator::PipelineOutput& o) { update_out_.emplace(o); });
+  update_cpu_s_ = process_cpu_s() - cpu0;
+  update_wall_s_ = seconds_since(t0);
+}
+
+std::size_t Scheduler::process_on_update_thread() {
+  std::size_t done = 0;
+  if (update_thread_->busy()) {
+    if (!update_thread_->done()) return 0;
+    update_thread_->collect();
+    release_held();
+    stats_.estimator_s += update_wall_s_;
+    if (update_out_) {
+      const auto o0 = Clock::now();
+      emit_frame(*update_out_, update_rx_ns_, update_cpu_s_);
+      stats_.output_s += seconds_since(o0);
+    }
+    ++done;
+  }
+  if (pipeline_->take_group()) {
+    update_rx_ns_ = current_rx_ns_;
+    update_thread_->start();
+  } else {
+    refresh_status();
+  }
+  return done;
+}
+
 std::size_t Scheduler::process(std::size_t max_groups) {
+  if (update_thread_ && max_groups != SIZE_MAX) return process_on_update_thread();
+  if (update_thread_) {
+    // Draining at the end: the running update first, then everything on this thread.
+    if (update_thread_->busy()) {
+      update_thread_->wait_and_collect();
+      release_held();
+      stats_.estimator_s += update_wall_s_;
+      if (update_out_) emit_frame(*update_out_, update_rx_ns_, update_cpu_s_);
+    }
+  }
   std::size_t done = 0;
   for (; done < max_groups; ++done) {
     const auto t0 = Clock::now();
     const double cpu0 = process_cpu_s();
     double output_s = 0.0;
-    double output_cpu_s = 0.0;
     bool produced = false;
     // The pipeline's output is copied out of the callback's scope only as far as the sink needs;
     // its CPU time is known once the pipeline call returns.
@@ -257,17 +396,9 @@ std::size_t Scheduler::process(std::size_t max_groups) {
     const double frame_wall_s = seconds_since(t0);
     if (produced) {
       const auto o0 = Clock::now();
-      const double ocpu0 = process_cpu_s();
-      predictor_.reset(out->t, estimator::Belief{out->x, out->P});
-      sink_.on_frame(FrameOutput{*out, stats_.frames, current_rx_ns_, 1e3 * frame_cpu_s,
-                                 last_body_imu_.gyro_rad_s, last_body_imu_.accel_m_s2});
-      ++stats_.frames;
-      last_frame_t_ = out->t;
-      last_frame_ms_ = out->report.timings.total_ms;
+      emit_frame(*out, current_rx_ns_, frame_cpu_s);
       output_s = seconds_since(o0);
-      output_cpu_s = process_cpu_s() - ocpu0;
     }
-    (void)output_cpu_s;
     stats_.estimator_s += frame_wall_s;
     stats_.output_s += output_s;
   }

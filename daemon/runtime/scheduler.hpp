@@ -9,9 +9,12 @@
 //
 // Replay calls step() until every source is exhausted: one thread, deterministic (the same input
 // gives the same bytes out, for any worker-pool size). The daemon's scheduler thread calls step()
-// whenever events are ready and waits otherwise; it runs at most `max_groups_per_step` estimator
-// groups per step so that the rings are drained between frames: when the estimator falls behind,
-// whole scans are dropped at the estimator's bounded scan queue (and counted), never packets.
+// whenever events are ready and waits otherwise; it hands one estimator group at a time to the
+// update thread (SchedulerOptions::update_thread) and keeps delivering events meanwhile, holding
+// what is for the estimator until the update is collected: IMU-rate poses never wait for a scan
+// update, and when the estimator falls behind whole scans are dropped at its bounded scan queue
+// (and counted), never packets. The estimator sees the same measurements in the same order
+// either way, so its output does not depend on which thread ran it.
 //
 // The estimator takes the body IMU (body_frame) and one LiDAR: the body IMU's own LiDAR when the
 // body is an internal IMU ("<lidar>.imu"), else the first enabled LiDAR. T_imu_lidar is that
@@ -28,6 +31,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "core/time.hpp"
@@ -35,6 +39,7 @@
 #include "daemon/runtime/output_sink.hpp"
 #include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/runtime/source.hpp"
+#include "daemon/runtime/update_thread.hpp"
 #include "estimator/imu/pose_predictor.hpp"
 #include "estimator/pipeline.hpp"
 #include "estimator/task_runner.hpp"
@@ -78,6 +83,25 @@ struct SchedulerOptions {
   // drawing (--debug-images).
   bool vio_colorize = false;
   bool vio_debug = false;
+  // The daemon: run each estimator group on an UpdateThread (update_thread.hpp) while this thread
+  // keeps delivering events and publishing IMU-rate poses; measurements that arrive during an
+  // update are queued here (bounded) and handed to the estimator after it. `update_doorbell` is
+  // rung when an update ends. Off (replay): every group runs on the calling thread.
+  bool update_thread = false;
+  drivers::capture::Doorbell* update_doorbell = nullptr;
+  UpdateThreadOptions update_thread_options;
+};
+
+// What health reports of the estimator, as of the last time the scheduler thread owned it (an
+// update running on the update thread must not be read).
+struct EstimatorStatus {
+  bool initialised = false;
+  std::string init_status;
+  estimator::PipelineCounters counters;
+  std::size_t queued_scans = 0;  // in the estimator and waiting for it
+  std::size_t queued_imu = 0;
+  std::uint64_t held_scans_dropped = 0;  // queued during an update beyond the bound
+  std::uint64_t held_imu_dropped = 0;
 };
 
 // One sensor as the scheduler runs it.
@@ -133,11 +157,24 @@ class Scheduler {
   void finish();
   // Runs every queued group the IMU data covers (used when draining at shutdown).
   void process_all();
+  // Like step() without delivering an event: with the update thread, collects a finished update
+  // and starts the next due group. Returns whether a frame was completed.
+  bool process_due() { return process(options_.max_groups_per_step) > 0; }
 
   [[nodiscard]] const std::vector<std::unique_ptr<ScheduledSensor>>& sensors() const {
     return sensors_;
   }
+  // Not while an update runs on the update thread (replay and tests without it).
   [[nodiscard]] const estimator::LioPipeline& pipeline() const { return *pipeline_; }
+  // The estimator's counters and queues for health, safe to call between steps.
+  [[nodiscard]] const EstimatorStatus& estimator_status();
+  // The update thread's heartbeat (0 without one).
+  [[nodiscard]] std::uint64_t update_beats() const {
+    return update_thread_ ? update_thread_->beats() : 0;
+  }
+  [[nodiscard]] bool has_update_thread() const { return update_thread_ != nullptr; }
+  // A group is on the update thread (measurements arriving now are held).
+  [[nodiscard]] bool update_running() const { return update_thread_ && update_thread_->busy(); }
   [[nodiscard]] const SchedulerStats& stats() const { return stats_; }
   [[nodiscard]] const SensorRoles& roles() const { return roles_; }
   // The fraction of the recording replayed, when a source can tell.
@@ -151,6 +188,19 @@ class Scheduler {
   // Runs up to `max_groups` estimator groups, one pipeline call per group so that each frame's
   // CPU time is its own.
   std::size_t process(std::size_t max_groups);
+  // With the update thread: collects a finished update and starts the next due group.
+  std::size_t process_on_update_thread();
+  // The update thread's job: the taken group through the pipeline.
+  void run_update();
+  // Publishes a finished frame (scheduler thread).
+  void emit_frame(const estimator::PipelineOutput& out, std::int64_t rx_ns, double cpu_s);
+  // Hands what arrived during an update to the estimator, in arrival order.
+  void release_held();
+  void refresh_status();
+  // Measurement delivery: straight into the estimator, or held while an update runs.
+  void to_estimator(const ImuSample& m);
+  void to_estimator(LidarScan scan);
+  void to_estimator(ImageFrame frame);
 
   const LivodConfig& config_;
   SchedulerOptions options_;
@@ -167,6 +217,19 @@ class Scheduler {
   std::int64_t current_rx_ns_ = 0;  // receive time of the event being delivered
   ImuSample last_body_imu_;         // the newest body-IMU sample (mapped)
   bool cut_ = false;                // max_recording reached
+
+  // The update thread (options_.update_thread) and what it hands back.
+  std::unique_ptr<UpdateThread> update_thread_;
+  std::optional<estimator::PipelineOutput> update_out_;  // written by the job
+  double update_wall_s_ = 0.0;                           // written by the job
+  double update_cpu_s_ = 0.0;                            // written by the job
+  std::int64_t update_rx_ns_ = 0;  // receive time of the event that completed the group
+  // Measurements that arrived during an update, in arrival order; bounded (oldest scan or sample
+  // dropped, counted) so that an estimator stuck for long cannot grow memory.
+  std::vector<std::variant<ImuSample, LidarScan, ImageFrame>> held_;
+  std::size_t held_scans_ = 0;
+  std::size_t held_imu_ = 0;
+  EstimatorStatus status_;
 };
 
 }  // namespace livod::daemon::runtime

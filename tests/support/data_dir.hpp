@@ -16,7 +16,8 @@ std::filesystem::path source_dir();
 // data_dir() / relative; fails the current test (GTEST_SKIP is not used: missing data is an error).
 std::filesystem::path data_path(const std::string& relative);
 
-// A fresh empty directory under the system temp dir (left in place for inspection after a run).
+// A fresh empty directory under the system temp dir. Removed when the test process exits if every
+// test passed; kept after a failure, or always with LIVOD_KEEP_TEST_DIRS=1, for inspection.
 std::filesystem::path temp_dir(const std::string& name);
 
 }  // namespace livod::test
