@@ -388,8 +388,8 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
     const std::string where = sensor_label(sites, config, i);
     switch (sensor_kind(s.driver)) {
       case SensorKind::camera:
-        // The visual update takes one camera. A live camera source is refused below; replayed
-        // frames (source.replay: image folders, bag image topics) are what runs today.
+        // The visual update takes one camera: live (source.device) or replayed (source.replay:
+        // image folders, bag image topics).
         if (!config.estimator.vio.enabled) {
           problems.warning(ProblemKind::inconsistent, sites[i].path + ".enabled", sites[i].at,
                            where + " is not used: estimator.vio.enabled is false (LiDAR-inertial " +
@@ -433,15 +433,8 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
         }
         break;
     }
-    // drivers/imu has the live SocketCAN and serial/USB sources and their decoders
-    // (daemon/devices), but the runtime does not start them yet: `livod run` would fail at open.
-    // (Their recordings replay: candump logs, serial captures.)
-    if (sites[i].source_ok && std::holds_alternative<DeviceSourceConfig>(s.source)) {
-      problems.error(ProblemKind::not_implemented, sites[i].path + ".source", sites[i].at,
-                     where + ": `livod run` does not start live " +
-                         std::string(enum_name(s.driver)) +
-                         " devices yet (a recording of it can be replayed: source.replay)");
-    }
+    // Live devices (cameras, CAN and serial IMUs) run in `livod run` (daemon/runtime/live_*);
+    // their recordings (candump logs, serial captures, image folders) replay.
   }
 }
 

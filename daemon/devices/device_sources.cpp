@@ -30,11 +30,16 @@ camera::PixelFormat pixel_format(CameraPixelFormat f) {
   return camera::PixelFormat::kMono8;
 }
 
-drivers::capture::DeviceThreadConfig thread_config(const std::string& prefix, const SensorConfig& sensor,
-                                          const LivodConfig& config) {
+drivers::capture::DeviceThreadConfig thread_config(const std::string& prefix,
+                                                   const SensorConfig& sensor,
+                                                   const LivodConfig& config,
+                                                   const DeviceOpenOptions& options) {
   drivers::capture::DeviceThreadConfig t;
   t.thread_name = prefix + sensor.name;
   if (config.realtime.capture_priority > 0) t.realtime_priority = config.realtime.capture_priority;
+  if (config.realtime.capture_cpu >= 0) t.cpu = config.realtime.capture_cpu;
+  t.wait_for_device = options.wait_for_device;
+  t.doorbell = options.doorbell;
   return t;
 }
 
@@ -64,7 +69,8 @@ camera::CameraClockConfig camera_clock_config(const SensorConfig& sensor) {
 }
 
 std::unique_ptr<camera::CameraSource> open_camera_source(const SensorConfig& sensor,
-                                                         const LivodConfig& config) {
+                                                         const LivodConfig& config,
+                                                         const DeviceOpenOptions& options) {
   const DeviceSourceConfig& device = device_of(sensor);
   const CameraConfig& cam = sensor.camera;
   camera::CameraSourceConfig sc;
@@ -75,7 +81,7 @@ std::unique_ptr<camera::CameraSource> open_camera_source(const SensorConfig& sen
   sc.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity);
   sc.decimation = cam.decimation;
   sc.clock = camera_clock_config(sensor);
-  sc.thread = thread_config("cam:", sensor, config);
+  sc.thread = thread_config("cam:", sensor, config, options);
   sc.stale_after = stale_after(config);
   std::optional<Nanoseconds> exposure;
   if (cam.exposure_s) exposure = from_seconds(*cam.exposure_s);
@@ -139,7 +145,8 @@ std::unique_ptr<camera::CameraSource> open_camera_source(const SensorConfig& sen
 }
 
 std::unique_ptr<imu::CanImuSource> open_can_imu_source(const SensorConfig& sensor,
-                                                       const LivodConfig& config) {
+                                                       const LivodConfig& config,
+                                                       const DeviceOpenOptions& options) {
   const DeviceSourceConfig& device = device_of(sensor);
   imu::CanImuSourceConfig c;
   c.name = sensor.name;
@@ -147,21 +154,22 @@ std::unique_ptr<imu::CanImuSource> open_can_imu_source(const SensorConfig& senso
   c.socket.fd_frames = sensor.can.fd_frames;
   // ring_capacity counts samples; a sample takes up to three frames.
   c.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity) * 3;
-  c.thread = thread_config("can:", sensor, config);
+  c.thread = thread_config("can:", sensor, config, options);
   c.timing.stale_after = stale_after(config);
   auto decoder = make_can_imu_decoder(sensor.can, sensor.name);
   return named(sensor, [&] { return std::make_unique<imu::CanImuSource>(c, std::move(decoder)); });
 }
 
 std::unique_ptr<imu::SerialImuSource> open_serial_imu_source(const SensorConfig& sensor,
-                                                             const LivodConfig& config) {
+                                                             const LivodConfig& config,
+                                                             const DeviceOpenOptions& options) {
   const DeviceSourceConfig& device = device_of(sensor);
   imu::SerialImuSourceConfig c;
   c.name = sensor.name;
   c.path = device.path;
   c.baud_rate = sensor.serial.baud_rate;
   c.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity);
-  c.thread = thread_config("imu:", sensor, config);
+  c.thread = thread_config("imu:", sensor, config, options);
   c.timing.stale_after = stale_after(config);
   auto decoder = make_serial_imu_decoder(sensor.serial, sensor.name);
   return named(sensor,
@@ -169,20 +177,7 @@ std::unique_ptr<imu::SerialImuSource> open_serial_imu_source(const SensorConfig&
 }
 
 livod::ClockMode imu_clock_mode(const SensorConfig& sensor) {
-  switch (sensor.clock.mode) {
-    case ClockMode::direct:
-      return livod::ClockMode::direct;
-    case ClockMode::free_running:
-      return livod::ClockMode::free_running;
-    case ClockMode::receive_time:
-      return livod::ClockMode::receive_time;
-    case ClockMode::automatic:
-      break;
-  }
-  const bool has_clock =
-      sensor.driver == Driver::serial_imu ||
-      (sensor.driver == Driver::can_imu && sensor.can.decoder == CanDecoder::sbg);
-  return has_clock ? livod::ClockMode::free_running : livod::ClockMode::receive_time;
+  return runtime::clock_domain_config(sensor).mode;
 }
 
 }  // namespace livod::daemon::devices

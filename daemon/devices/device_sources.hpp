@@ -10,6 +10,8 @@
 //
 // Every source starts its capture thread in the constructor and stops it in stop() / the
 // destructor (drivers/camera/camera_source.hpp, drivers/imu/imu_source.hpp for the contracts).
+// By default a device that cannot be opened throws; with DeviceOpenOptions::wait_for_device (what
+// `livod run` uses, runtime/live_device_sources.hpp) its capture thread keeps trying instead.
 // Camera frames come out mapped onto the common timeline (the camera clock adds the sensor's
 // time_offset_s); IMU samples carry sensor and host time and are mapped by the caller's clock
 // domain (runtime::SensorClockMapper), in receive_time mode for IMUs without a sensor clock
@@ -20,9 +22,18 @@
 #include "core/clock_domain.hpp"
 #include "daemon/config/config.hpp"
 #include "drivers/camera/camera_source.hpp"
+#include "drivers/capture/doorbell.hpp"
 #include "drivers/imu/imu_source.hpp"
 
 namespace livod::daemon::devices {
+
+struct DeviceOpenOptions {
+  // A device that cannot be opened does not throw: the source reports why (health last_error,
+  // device state OPENING) and its capture thread retries every second until it opens.
+  bool wait_for_device = false;
+  // Rung by the capture thread when data arrives (wakes the scheduler). May be null.
+  drivers::capture::Doorbell* doorbell = nullptr;
+};
 
 // The camera clock for a sensor: clock.mode auto lets the frames' clock decide (V4L2 monotonic
 // stamps: direct; GenICam ticks: free-running; PTP: direct), other modes force it; latency,
@@ -32,19 +43,23 @@ camera::CameraClockConfig camera_clock_config(const SensorConfig& sensor);
 // A v4l2 or aravis sensor with a device source. Throws livod::Error "sensor 'NAME': ..." when the
 // camera is missing or refuses the configuration (format, size, controls).
 std::unique_ptr<camera::CameraSource> open_camera_source(const SensorConfig& sensor,
-                                                         const LivodConfig& config);
+                                                         const LivodConfig& config,
+                                                         const DeviceOpenOptions& options = {});
 
 // A can_imu sensor with a device source (SocketCAN interface).
 std::unique_ptr<imu::CanImuSource> open_can_imu_source(const SensorConfig& sensor,
-                                                       const LivodConfig& config);
+                                                       const LivodConfig& config,
+                                                       const DeviceOpenOptions& options = {});
 
 // A serial_imu sensor with a device source (tty path or usb:VVVV:PPPP[:SERIAL]).
 std::unique_ptr<imu::SerialImuSource> open_serial_imu_source(const SensorConfig& sensor,
-                                                             const LivodConfig& config);
+                                                             const LivodConfig& config,
+                                                             const DeviceOpenOptions& options = {});
 
 // The clock mode an external IMU needs with clock.mode auto: free_running when its protocol
 // carries a sensor clock (SBG, Xsens), receive_time otherwise (Bosch MM7, custom CAN); the
-// configured mode when one is given.
+// configured mode when one is given. The same as runtime::clock_domain_config(sensor).mode, which
+// the scheduler's clock domains use, live and in replay.
 livod::ClockMode imu_clock_mode(const SensorConfig& sensor);
 
 }  // namespace livod::daemon::devices

@@ -11,6 +11,8 @@
 #include "core/error.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/sources.hpp"
+#include "daemon/runtime/live_camera_source.hpp"
+#include "daemon/runtime/live_imu_source.hpp"
 #include "daemon/runtime/live_lidar_source.hpp"
 #include "daemon/runtime/live_outputs.hpp"
 #include "daemon/runtime/paced_sources.hpp"
@@ -40,6 +42,13 @@ struct OpenedSources {
   bool time_released = false;  // some source has no doorbell: poll
 };
 
+// "v4l2 /dev/video0", "aravis Basler-123", "can_imu can0", "serial_imu /dev/ttyUSB0".
+std::string device_origin(const SensorConfig& s, const DeviceSourceConfig& d) {
+  std::string what = d.interface.empty() ? d.path : d.interface;
+  if (s.driver == Driver::aravis) what = d.camera_id.empty() ? "(first camera found)" : d.camera_id;
+  return std::string(enum_name(s.driver)) + " " + what;
+}
+
 OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
                         const DaemonOptions& options, drivers::capture::Doorbell& wake) {
   OpenedSources out;
@@ -57,9 +66,21 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
       throw Error(what + " replays a recording: `livod run` reads live sensors (replay it with " +
                   "`livod replay --realtime`)");
     }
+    if (const auto* device = std::get_if<DeviceSourceConfig>(&s.source)) {
+      // Cameras and external IMUs (live_camera_source.hpp, live_imu_source.hpp): a device that
+      // is not there yet is waited for, not fatal.
+      SensorInput in;
+      in.sensor_index = i;
+      in.origin = device_origin(s, *device);
+      in.source = sensor_kind(s.driver) == SensorKind::camera ? open_live_camera(s, config, &wake)
+                                                              : open_live_imu(s, config, &wake);
+      out.inputs.push_back(std::move(in));
+      continue;
+    }
     if (!is_packet_lidar(s.driver) || !std::holds_alternative<UdpSourceConfig>(s.source)) {
       throw Error(what + ": live operation is implemented for packet LiDARs over UDP (ouster, " +
-                  "velodyne, livox_sdk1, livox_sdk2, hesai) and their internal IMUs");
+                  "velodyne, livox_sdk1, livox_sdk2, hesai), cameras (v4l2, aravis) and IMUs " +
+                  "(can_imu, serial_imu) with a device source");
     }
     auto source = open_live_lidar(s, lo);
     for (const auto& [stream, port] : source->local_ports()) {
@@ -320,6 +341,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   result.errors = publisher.stop();
   if (!scheduler_error.empty()) result.errors.insert(result.errors.begin(), scheduler_error);
   result.frames = scheduler.stats().frames;
+  result.estimator = scheduler.pipeline().counters();
   result.publisher = publisher.stats();
   for (const auto& s : scheduler.sensors()) {
     result.sensor_summaries.push_back(s->config->name + ": " + s->source->summary());

@@ -24,6 +24,7 @@
 
 #include "daemon/config/config.hpp"
 #include "daemon/runtime/publisher.hpp"
+#include "estimator/pipeline.hpp"
 #include "io/input_loss.hpp"
 
 namespace livod::daemon::runtime {
@@ -65,6 +66,8 @@ struct DaemonResult {
   std::string stopped_by;                     // "SIGTERM", "end of recording", ...
   int stop_signal = 0;                        // SIGINT / SIGTERM when one stopped it
   io::InputLossLog losses;  // paced replay: what the recordings' readers could not read
+  estimator::PipelineCounters
+      estimator;  // scans, IMU samples, images in; image groups, VIO updates
 };
 
 // Runs until stopped. The configuration must have loaded without errors. Throws livod::Error

@@ -111,7 +111,8 @@ void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {
   for (std::size_t i = 0; i < sensors.size(); ++i) {
     ScheduledSensor& s = *sensors[i];
     const std::string kind(enum_name(s.config->driver));
-    const ClockDomainStats clock = s.clock->domain().stats();
+    // A live camera maps its frames with its own clock domain (source.hpp).
+    const ClockDomainStats clock = s.source->clock_stats().value_or(s.clock->domain().stats());
     const auto health = s.source->health(now);
     auto& rate = rates_[i];
     rate.scans.add(now, s.scans);

@@ -293,6 +293,13 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
     };
     r->sinks.on_image = [this, self](const ImageFrame& image) {
       if (!self->images_to_estimator) return;
+      if (self->source->delivers_mapped_images()) {
+        // A live camera: mapped by its own clock domain and decimated by its capture thread.
+        ++self->images_seen;
+        ++self->images;
+        to_estimator(ImageFrame(image));  // shares the pixels: the source made them for it
+        return;
+      }
       // camera.decimation keeps every n-th frame (FAST-LIVO2 hilti_en: 4).
       const auto decimation =
           static_cast<std::uint64_t>(std::max(1, self->config->camera.decimation));

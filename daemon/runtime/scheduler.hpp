@@ -25,8 +25,11 @@
 // scan end is an update, docs/estimator.md "Several LiDARs"). With estimator.vio.enabled (one
 // LiDAR only) it also takes the first enabled camera, whose frames go through that camera's
 // clock domain into the visual update (LIO then VIO at the image time, estimator/sync); T_imu_cam
-// is its T_body_sensor. A LiDAR's internal IMU, when enabled, feeds its clock domain even when it
-// is not the body IMU.
+// is its T_body_sensor. A live camera's frames arrive already on the common timeline and
+// decimated (MeasurementSource::delivers_mapped_images: the camera driver's clock maps them to
+// mid-exposure) and go to the estimator as they are. The body IMU may be a LiDAR's internal IMU
+// or an external one (CAN, serial: live or replayed). A LiDAR's internal IMU, when enabled, feeds
+// its clock domain even when it is not the body IMU.
 
 #include <cstddef>
 #include <cstdint>

@@ -16,14 +16,21 @@ bool is_dataset(Driver driver) {
          driver == Driver::dataset_camera;
 }
 
+// CAN IMUs whose protocol has no clock (Bosch MM7, custom): their decoders stamp the sensor time
+// with the receive time, so there is no sensor clock to model (docs/drivers/imu.md).
+bool has_no_sensor_clock(const SensorConfig& sensor) {
+  return sensor.driver == Driver::can_imu && sensor.can.decoder != CanDecoder::sbg;
+}
+
 }  // namespace
 
 ClockDomainConfig clock_domain_config(const SensorConfig& sensor) {
   ClockDomainConfig c;
   switch (sensor.clock.mode) {
     case ClockMode::automatic:
-      c.mode =
-          is_dataset(sensor.driver) ? livod::ClockMode::direct : livod::ClockMode::free_running;
+      c.mode = is_dataset(sensor.driver)     ? livod::ClockMode::direct
+               : has_no_sensor_clock(sensor) ? livod::ClockMode::receive_time
+                                             : livod::ClockMode::free_running;
       break;
     case ClockMode::direct:
       c.mode = livod::ClockMode::direct;

@@ -25,7 +25,8 @@ namespace livod::daemon::runtime {
 
 // ClockConfig (YAML) -> ClockDomainConfig. `auto` is free_running for sensors decoded from their
 // packets or frames (their stamps are a sensor clock), direct for dataset_* recordings (their
-// header stamps were already put on one clock by the recording system).
+// header stamps were already put on one clock by the recording system), receive_time for CAN IMUs
+// without a clock (bosch_mm7, custom decoders).
 ClockDomainConfig clock_domain_config(const SensorConfig& sensor);
 
 class SensorClockMapper {

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "core/clock_domain.hpp"
 #include "core/time.hpp"
 #include "drivers/capture/health.hpp"
 #include "drivers/lidar_decoder.hpp"
@@ -72,6 +73,13 @@ class MeasurementSource {
   // The source's own threads and their heartbeats (capture threads: one per socket), for health
   // and the watchdog. Recordings have none.
   [[nodiscard]] virtual std::vector<SourceThread> threads() const { return {}; }
+  // True for a source whose images are already on the common timeline and decimated when
+  // delivered: a live camera, whose own clock domain (drivers/camera/camera_clock.hpp: the
+  // frame's clock kind, PTP, readout, mid-exposure) maps each frame and whose capture thread skips
+  // the decimated frames. The scheduler then neither maps nor decimates its images again.
+  [[nodiscard]] virtual bool delivers_mapped_images() const { return false; }
+  // That source's clock statistics for health (nullopt: the scheduler's clock domain is the one).
+  [[nodiscard]] virtual std::optional<ClockDomainStats> clock_stats() const { return std::nullopt; }
 };
 
 }  // namespace livod::daemon::runtime

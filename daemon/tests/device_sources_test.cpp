@@ -24,9 +24,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// A configuration with no error but "not implemented": check-config rejects live cameras and
-// IMUs because the runtime does not start them yet; the device sources tested here are what it
-// will start. Warnings (a camera unused while the visual update is off) are not errors.
+// A configuration with no error but "not implemented" (the one below lists more IMUs and cameras
+// than the estimator takes). Warnings (a camera unused while the visual update is off) are not
+// errors.
 LivodConfig load_ok(const std::string& yaml) {
   auto r = load_config_from_string(yaml, "test.yaml");
   std::string problems;

@@ -141,6 +141,12 @@ std::size_t CameraSource::poll(const FrameCallback& callback, std::size_t max_fr
   return n;
 }
 
+std::optional<HostTime> CameraSource::next_rx() {
+  const FrameRing::Entry* e = ring_.front();
+  if (e == nullptr) return std::nullopt;
+  return e->info.host_rx;
+}
+
 CameraHealth CameraSource::update_health(HostTime now) {
   CameraHealth h;
   h.device = thread_->counters();

@@ -22,6 +22,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "drivers/camera/camera_backend.hpp"
@@ -40,7 +41,8 @@ struct CameraSourceConfig {
   std::size_t ring_capacity = 8;  // frames; e.g. 8 x 1280 x 1024 mono8 = 10.5 MB
   int decimation = 1;             // keep every n-th frame
   CameraClockConfig clock;
-  drivers::capture::DeviceThreadConfig thread;  // silence_timeout: set from stale_after unless given
+  drivers::capture::DeviceThreadConfig
+      thread;  // silence_timeout: set from stale_after unless given
   Nanoseconds stale_after{std::chrono::seconds(1)};
   Nanoseconds rate_window{std::chrono::seconds(5)};
   // Hardware-triggered cameras are silent while the trigger is: do not reopen on silence.
@@ -73,8 +75,12 @@ class CameraSource {
   // Consumer thread: maps and hands out up to max_frames queued frames (each pixel view valid
   // during its callback only); returns how many.
   std::size_t poll(const FrameCallback& callback, std::size_t max_frames = SIZE_MAX);
+  // Consumer thread: the receive time (host_rx) of the oldest queued frame; nullopt when none is.
+  [[nodiscard]] std::optional<HostTime> next_rx();
   // Consumer thread, at the health cadence.
   CameraHealth update_health(HostTime now);
+  // Consumer thread: the camera clock's statistics (nullopt until the first frame chose it).
+  [[nodiscard]] std::optional<ClockDomainStats> clock_stats() const { return clock_.stats(); }
 
   // Any thread.
   void set_exposure(Nanoseconds exposure);

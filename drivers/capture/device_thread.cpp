@@ -38,10 +38,24 @@ const char* to_string(DeviceState s) {
 DeviceThread::DeviceThread(DeviceLink& link, DeviceThreadConfig config)
     : link_(link), config_(std::move(config)) {
   if (config_.poll_timeout.count() <= 0) config_.poll_timeout = std::chrono::milliseconds(1);
-  link_.open();  // throws: a device missing at start-up is reported to the caller
-  open_ = true;
-  publish(published_.opens, std::uint64_t{1});
-  publish(published_.state, DeviceState::kStreaming);
+  if (config_.wait_for_device) {
+    try {
+      link_.open();
+      open_ = true;
+    } catch (const std::exception& e) {
+      // Not there yet: the thread retries (state OPENING until the first open succeeds).
+      publish(published_.open_failures, std::uint64_t{1});
+      set_error(e.what());
+      first_retry_ns_ = host_now().ns + config_.reopen_interval.count();
+    }
+  } else {
+    link_.open();  // throws: a device missing at start-up is reported to the caller
+    open_ = true;
+  }
+  if (open_) {
+    publish(published_.opens, std::uint64_t{1});
+    publish(published_.state, DeviceState::kStreaming);
+  }
   if (config_.realtime_priority) publish(published_.priority, SchedulingResult::kPending);
   if (config_.cpu) publish(published_.affinity, SchedulingResult::kPending);
   thread_ = std::jthread([this](const std::stop_token& stop) { run(stop); });
@@ -105,7 +119,7 @@ void DeviceThread::run(const std::stop_token& stop) {
   std::uint64_t wakeups = 0;
   std::int64_t last_data_ns = 0;
   std::int64_t streaming_since_ns = host_now().ns;
-  std::int64_t next_open_ns = 0;
+  std::int64_t next_open_ns = first_retry_ns_;
   const std::int64_t silence_ns = config_.silence_timeout.count();
   while (!stop.stop_requested()) {
     ++wakeups;
@@ -122,8 +136,9 @@ void DeviceThread::run(const std::stop_token& stop) {
         link_.open();
         open_ = true;
         streaming_since_ns = host_now().ns;
+        // A late first open (wait_for_device) is not a reconnect.
+        if (published_.opens.load(std::memory_order_relaxed) > 0) bump(published_.reconnects);
         bump(published_.opens);
-        bump(published_.reconnects);
         publish(published_.state, DeviceState::kStreaming);
       } catch (const std::exception& e) {
         bump(published_.open_failures);
@@ -137,6 +152,7 @@ void DeviceThread::run(const std::stop_token& stop) {
     if (w == DeviceLink::Wait::kData) {
       last_data_ns = now;
       publish(published_.last_data_ns, last_data_ns);
+      if (config_.doorbell != nullptr) config_.doorbell->ring();
     }
     if (w != DeviceLink::Wait::kLost && !link_.service()) w = DeviceLink::Wait::kLost;
     std::string reason;

@@ -8,8 +8,11 @@
 //      +------------- close(); retry open() every reopen_interval ----------------------+
 //
 // The first open() runs on the constructing thread, so a device missing at start-up fails there
-// with the link's message (which names the device) instead of being retried silently. After that,
-// losses are counted, reported (state, last_error) and reopened without restarting anything.
+// with the link's message (which names the device) instead of being retried silently; with
+// `wait_for_device` the failure is recorded instead (state OPENING, open_failures, last_error) and
+// the thread keeps trying every reopen_interval (`livod run`: a robot may boot before its USB IMU
+// enumerates). After that, losses are counted, reported (state, last_error) and reopened without
+// restarting anything.
 //
 // Steady state (STREAMING): the thread only calls link.wait_and_read() with a short timeout and
 // link.service(); it never allocates or logs (last_error is written under a mutex only on a
@@ -30,6 +33,7 @@
 
 #include "core/time.hpp"
 #include "drivers/capture/capture_thread.hpp"
+#include "drivers/capture/doorbell.hpp"
 
 namespace livod::drivers::capture {
 
@@ -67,14 +71,20 @@ struct DeviceThreadConfig {
   // not broken).
   Nanoseconds silence_timeout{0};
   Nanoseconds reopen_interval{std::chrono::seconds(1)};
+  // A first open() that fails does not throw: the thread retries it every reopen_interval (see
+  // above). last_error() says why it is not open yet.
+  bool wait_for_device = false;
+  // Rung after every read that delivered data (wakes the consumer, e.g. the scheduler). May be
+  // null.
+  Doorbell* doorbell = nullptr;
 };
 
 struct DeviceThreadCounters {
   DeviceState state = DeviceState::kOpening;
   std::uint64_t opens = 0;          // successful opens (the first included)
-  std::uint64_t open_failures = 0;  // failed reopen attempts
+  std::uint64_t open_failures = 0;  // failed open attempts (first ones with wait_for_device too)
   std::uint64_t losses = 0;         // STREAMING -> LOST transitions
-  std::uint64_t reconnects = 0;     // successful opens after a loss
+  std::uint64_t reconnects = 0;     // successful opens after a loss (not a late first open)
   std::uint64_t wakeups = 0;        // loop iterations, idle ones included
   std::int64_t last_data_ns = 0;    // CLOCK_MONOTONIC of the newest data; 0 = none yet
   SchedulingResult priority = SchedulingResult::kNotRequested;
@@ -85,8 +95,8 @@ struct DeviceThreadCounters {
 
 class DeviceThread {
  public:
-  // Opens `link` on the calling thread (its exception propagates) and starts the thread. `link`
-  // must outlive this object.
+  // Opens `link` on the calling thread (its exception propagates, unless wait_for_device) and
+  // starts the thread. `link` must outlive this object.
   DeviceThread(DeviceLink& link, DeviceThreadConfig config);
   ~DeviceThread();
   DeviceThread(const DeviceThread&) = delete;
@@ -124,9 +134,10 @@ class DeviceThread {
   Published published_;
   mutable std::mutex error_mutex_;
   std::string last_error_;
-  bool open_ = false;    // the link is open (capture thread after start)
-  bool closed_ = false;  // stop() closed the link
-  std::jthread thread_;  // last: started when everything else is ready
+  bool open_ = false;                // the link is open (capture thread after start)
+  bool closed_ = false;              // stop() closed the link
+  std::int64_t first_retry_ns_ = 0;  // wait_for_device: when to retry a failed first open
+  std::jthread thread_;              // last: started when everything else is ready
 };
 
 }  // namespace livod::drivers::capture

@@ -30,10 +30,10 @@ drivers::DecoderCounters as_decoder_counters(const ImuDecoderCounters& c) {
   return d;
 }
 
-drivers::capture::SourceHealth make_source_health(const std::string& name, drivers::capture::StreamHealth stream,
-                                         const drivers::capture::DeviceThreadCounters& device,
-                                         const ImuDecoderCounters& decoder, std::uint64_t popped,
-                                         std::string last_error) {
+drivers::capture::SourceHealth make_source_health(
+    const std::string& name, drivers::capture::StreamHealth stream,
+    const drivers::capture::DeviceThreadCounters& device, const ImuDecoderCounters& decoder,
+    std::uint64_t popped, std::string last_error) {
   drivers::capture::SourceHealth h;
   h.name = name;
   h.streams.push_back(std::move(stream));
@@ -45,7 +45,8 @@ drivers::capture::SourceHealth make_source_health(const std::string& name, drive
   return h;
 }
 
-void copy_scheduling(const drivers::capture::DeviceThreadCounters& d, drivers::capture::CaptureCounters& c) {
+void copy_scheduling(const drivers::capture::DeviceThreadCounters& d,
+                     drivers::capture::CaptureCounters& c) {
   c.wakeups = d.wakeups;
   c.priority = d.priority;
   c.affinity = d.affinity;
@@ -225,6 +226,12 @@ std::size_t CanImuSource::poll(const ImuSink& sink, std::size_t max_frames) {
   return n;
 }
 
+std::optional<HostTime> CanImuSource::next_rx() {
+  const CanRecord* r = ring_.front();
+  if (r == nullptr) return std::nullopt;
+  return HostTime(r->rx_time_ns);
+}
+
 CanBusCounters CanImuSource::bus_counters() const {
   return link_->bus();
 }
@@ -258,7 +265,8 @@ ImuSourceHealth CanImuSource::update_health(HostTime now) {
 
 class SerialImuSource::Link final : public drivers::capture::DeviceLink {
  public:
-  Link(std::string path, PortOpener opener, drivers::capture::PacketRing& ring, std::size_t chunk_bytes)
+  Link(std::string path, PortOpener opener, drivers::capture::PacketRing& ring,
+       std::size_t chunk_bytes)
       : path_(std::move(path)), opener_(std::move(opener)), ring_(ring), chunk_(chunk_bytes) {}
 
   void open() override { port_ = opener_(); }
@@ -358,6 +366,12 @@ std::size_t SerialImuSource::poll(const ImuSink& sink, std::size_t max_chunks) {
   }
   popped_ += n;
   return n;
+}
+
+std::optional<HostTime> SerialImuSource::next_rx() {
+  const drivers::capture::RawPacket* p = ring_.front();
+  if (p == nullptr) return std::nullopt;
+  return p->rx;
 }
 
 drivers::capture::DeviceThreadCounters SerialImuSource::device_counters() const {

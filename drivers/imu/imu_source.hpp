@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/realtime_offset.hpp"
@@ -37,7 +38,8 @@
 namespace livod::imu {
 
 struct ImuSourceHealth {
-  drivers::capture::SourceHealth source;  // one stream: state, rate, STALE, drops; device state, reconnects
+  drivers::capture::SourceHealth
+      source;  // one stream: state, rate, STALE, drops; device state, reconnects
   drivers::capture::DeviceThreadCounters device;
   ImuDecoderCounters decoder;
   CanBusCounters bus;  // CAN sources only
@@ -77,6 +79,8 @@ class CanImuSource {
 
   // Consumer thread: decodes up to max_frames queued frames; returns how many were popped.
   std::size_t poll(const ImuSink& sink, std::size_t max_frames = SIZE_MAX);
+  // Consumer thread: the receive time of the oldest queued frame; nullopt when none is.
+  [[nodiscard]] std::optional<HostTime> next_rx();
   // Consumer thread, at the health cadence.
   ImuSourceHealth update_health(HostTime now);
 
@@ -123,6 +127,8 @@ class SerialImuSource {
 
   // Consumer thread: decodes up to max_chunks queued reads; returns how many were popped.
   std::size_t poll(const ImuSink& sink, std::size_t max_chunks = SIZE_MAX);
+  // Consumer thread: the receive time of the oldest queued read; nullopt when none is.
+  [[nodiscard]] std::optional<HostTime> next_rx();
   ImuSourceHealth update_health(HostTime now);
 
   [[nodiscard]] const StreamImuDecoder& decoder() const { return *decoder_; }

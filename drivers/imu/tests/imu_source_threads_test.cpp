@@ -257,6 +257,56 @@ TEST(ImuSourceThreads, SerialSourceDecodesAnXsensStreamFromARealTtyAndReopensIt)
   EXPECT_EQ(h.ring_overruns, 0u);
 }
 
+// `livod run`'s policy (wait_for_device): a device missing at start-up is not an error but a
+// device not there yet: the source reports why (state OPENING, last_error naming the path), keeps
+// trying, and streams once the device appears (a robot booting before its USB IMU enumerates).
+// Data rings the consumer's doorbell.
+TEST(ImuSourceThreads, ASerialDeviceMissingAtStartIsWaitedForWhenAsked) {
+  const auto dir = test::temp_dir("imu_source_late_tty");
+  const auto link = dir / "late-xsens";
+  std::filesystem::remove(link);
+  drivers::capture::Doorbell doorbell;
+  SerialImuSourceConfig c;
+  c.name = "xsens";
+  c.path = link.string();
+  c.thread.poll_timeout = 5ms;
+  c.thread.reopen_interval = 20ms;
+  c.thread.wait_for_device = true;
+  c.thread.doorbell = &doorbell;
+  c.timing.stale_after = 200ms;
+  SerialImuSource source(c, std::make_unique<XsensMtData2Decoder>());
+  std::vector<ImuSample> samples;
+  auto poll = [&] { source.poll([&](const ImuSample& s) { samples.push_back(s); }); };
+  ASSERT_TRUE(wait_for(poll, [&] { return source.device_counters().open_failures >= 3; }));
+  auto d = source.device_counters();
+  EXPECT_EQ(d.state, drivers::capture::DeviceState::kOpening);
+  EXPECT_EQ(d.opens, 0u);
+  auto h = source.update_health(host_now());
+  EXPECT_NE(h.source.last_error.find(link.string() + " does not exist"), std::string::npos)
+      << h.source.last_error;
+  EXPECT_EQ(h.source.device_state, "OPENING");
+
+  FakeTty tty(link);
+  ASSERT_TRUE(wait_for(poll, [&] { return source.device_counters().opens == 1; }));
+  const std::uint32_t token = doorbell.prepare();
+  std::vector<std::uint8_t> stream;
+  for (int k = 0; k < 20; ++k) {
+    XsensSample x;
+    x.packet_counter = static_cast<std::uint16_t>(k);
+    x.sample_time_fine = static_cast<std::uint32_t>(25 * k);
+    const auto m = encode_mtdata2_sample(x);
+    stream.insert(stream.end(), m.begin(), m.end());
+  }
+  tty.write(stream);
+  doorbell.wait(token, 5s);  // rung by the capture thread (returns at once if already rung)
+  EXPECT_NE(doorbell.prepare(), token);
+  ASSERT_TRUE(wait_for(poll, [&] { return samples.size() == 20; })) << samples.size();
+  d = source.device_counters();
+  EXPECT_EQ(d.state, drivers::capture::DeviceState::kStreaming);
+  EXPECT_EQ(d.reconnects, 0u) << "a late first open is not a reconnect";
+  EXPECT_EQ(d.losses, 0u);
+}
+
 TEST(ImuSourceThreads, AMissingSerialDeviceFailsAtConstructionNamingIt) {
   SerialImuSourceConfig c;
   c.name = "xsens";
