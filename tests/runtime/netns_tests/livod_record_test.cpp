@@ -47,7 +47,8 @@ bool inside_private_namespace() {
 // The HDL-32E with its internal IMU as the body, live on loopback (the driver's default ports)
 // or replayed from `pcap`.
 std::filesystem::path write_config(const std::filesystem::path& dir, const std::string& source,
-                                   const std::string& outputs = "") {
+                                   const std::string& outputs = "",
+                                   const std::string& sensor_extra = "") {
   const auto path = dir / "hdl.yaml";
   std::ofstream(path) << "body_frame: hdl.imu\n"
                       << "sensors:\n"
@@ -58,10 +59,14 @@ std::filesystem::path write_config(const std::filesystem::path& dir, const std::
                       << "\n"
                       << "    source: " << source << "\n"
                       << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
-                      << "outputs:\n  lcm: null\n"
+                      << sensor_extra << "outputs:\n  lcm: null\n"
                       << outputs;
   return path;
 }
+
+// A scheduler-side ring that holds the whole capture: `livod run` on a loaded machine must not
+// lose packets the recorder keeps (the comparison is with what run computed).
+const std::string kWholeCaptureRing = "    ring_capacity: 4096\n";
 
 const std::string kLive =
     "{udp: {bind_address: 127.0.0.1, sensor_address: 127.0.0.1, socket_buffer_bytes: 16777216}}";
@@ -116,17 +121,25 @@ std::vector<daemon::publish::PoseRecord> to_records(const eval::Trajectory& t) {
 }
 
 // The recorded capture's replay against a reference trajectory: every pose paired, within the
-// live-vs-replay bounds of runtime_livod_run_udpm_netns_test.
+// bounds given.
 void expect_same_trajectory(const std::filesystem::path& recorded_config,
-                            const eval::Trajectory& reference, const std::string& what) {
+                            const eval::Trajectory& reference, double max_position_m,
+                            double max_rotation_deg, const std::string& what) {
   const auto replayed = test::replay(recorded_config, recorded_config.parent_path() / "replay");
   ASSERT_GE(replayed.summary.frames, 10U) << replayed.summary.init_status;
   const auto trajectory = eval::read_tum(replayed.trajectory);
   EXPECT_EQ(trajectory.poses.size(), reference.poses.size());
   const test::PoseComparison c = test::compare_with_replay(to_records(trajectory), reference);
+  // Every pose paired in time; the last, of the partial scan flushed at the end, may be stamped
+  // differently by a live stop and a replay's end (as in the udpm test): its pose is compared
+  // here.
   EXPECT_GE(c.matched + 1, reference.poses.size());
-  EXPECT_LE(c.max_position_m, 1e-3);
-  EXPECT_LE(c.max_rotation_deg, 0.05);
+  if (!trajectory.poses.empty() && !reference.poses.empty()) {
+    EXPECT_LE((trajectory.poses.back().translation - reference.poses.back().translation).norm(),
+              max_position_m);
+  }
+  EXPECT_LE(c.max_position_m, max_position_m);
+  EXPECT_LE(c.max_rotation_deg, max_rotation_deg);
   std::printf(
       "[%s] %zu poses replayed from the recording (reference %zu), max |dp| %.3f mm, "
       "|dR| %.4f deg\n",
@@ -162,7 +175,7 @@ TEST(LivodRecord, RecordsEveryDatagramAndTheRecordingReplaysToTheCapturesTraject
 
   // Every datagram of both ports, byte for byte, in order; a clean file.
   const Datagrams want = read_pcap(pcap);
-  const Datagrams got = read_pcap(dir / "hdl.pcap");
+  Datagrams got = read_pcap(dir / "hdl.pcap");
   EXPECT_TRUE(got.end_error.empty()) << got.end_error;
   EXPECT_EQ(got.damaged, 0U);
   for (const auto port : kPorts) {
@@ -173,7 +186,12 @@ TEST(LivodRecord, RecordsEveryDatagramAndTheRecordingReplaysToTheCapturesTraject
   EXPECT_NE(report.find("hdl.pcap: 3001 packets"), std::string::npos) << report;
   EXPECT_NE(report.find("lost 0 packets"), std::string::npos) << report;
 
-  expect_same_trajectory(dir / "config.yaml", reference, "record");
+  // The receive times are the kernel's of this run, not those of the host that captured the
+  // original, and the HDL-32E's clock is mapped through them (its free-running clock model): the
+  // trajectory agrees as a live run's does with a replay of the same packets (1.9 mm measured on
+  // this short capture, whose clock model has only 1.5 s of samples). The recording reproduces
+  // what `livod run` computed from these packets exactly (LivodRunRecord below).
+  expect_same_trajectory(dir / "config.yaml", reference, 5e-3, 0.05, "record");
 }
 
 TEST(LivodRecord, SigkillLeavesAPcapReadableUpToItsLastBlock) {
@@ -201,7 +219,7 @@ TEST(LivodRecord, SigkillLeavesAPcapReadableUpToItsLastBlock) {
   EXPECT_TRUE(std::filesystem::exists(dir / "config.yaml"));
   EXPECT_FALSE(std::filesystem::exists(dir / "recording.txt"));
   const Datagrams want = read_pcap(pcap);
-  const Datagrams got = read_pcap(dir / "hdl.pcap");
+  Datagrams got = read_pcap(dir / "hdl.pcap");
   EXPECT_LE(got.damaged, 1U) << got.end_error;
   if (!got.end_error.empty()) {
     EXPECT_NE(got.end_error.find("truncated"), std::string::npos) << got.end_error;
@@ -226,7 +244,8 @@ TEST(LivodRunRecord, RecordsBesideTheEstimatorAndReplaysToWhatRunComputed) {
   const auto dir = work / "recording";
   const auto config = write_config(
       work, kLive,
-      "  trajectory: " + live_trajectory.string() + "\n  record: " + dir.string() + "\n");
+      "  trajectory: " + live_trajectory.string() + "\n  record: " + dir.string() + "\n",
+      kWholeCaptureRing);
   const auto log = work / "run.log";
   test::ChildProcess livod({LIVOD_BINARY, "run", "--config", config.string()},
                            {.output = log, .environment = {}});
@@ -239,12 +258,13 @@ TEST(LivodRunRecord, RecordsBesideTheEstimatorAndReplaysToWhatRunComputed) {
   ASSERT_TRUE(status.has_value());
   EXPECT_EQ(*status, 0) << test::read_text_file(log);
 
-  const Datagrams got = read_pcap(dir / "hdl.pcap");
+  Datagrams got = read_pcap(dir / "hdl.pcap");
   EXPECT_EQ(got.total, 3001U);
   EXPECT_TRUE(got.end_error.empty()) << got.end_error;
   const auto live = eval::read_tum(live_trajectory);
   ASSERT_GE(live.poses.size(), 10U) << test::read_text_file(log);
-  expect_same_trajectory(dir / "config.yaml", live, "run --record");
+  // The same packets with the same receive times: the same poses, to the last printed digit.
+  expect_same_trajectory(dir / "config.yaml", live, 2e-9, 1e-6, "run --record");
 }
 
 }  // namespace
