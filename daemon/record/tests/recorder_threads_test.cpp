@@ -86,6 +86,16 @@ TEST(Recorder, WritesEveryStreamOfALidarIntoOnePcapInReceiveOrder) {
   EXPECT_EQ(stats[0].file_bytes, std::filesystem::file_size(dir / "hdl.pcap"));
   EXPECT_EQ(stats[0].first_ns, capture.front().time_ns);
   EXPECT_EQ(stats[0].last_ns, capture.back().time_ns);
+
+  // A file cut inside its last record (a process killed while the kernel took a block): every
+  // record before reads back, the tail is reported as truncated, not as an error mid-file.
+  const auto cut = dir / "cut.pcap";
+  std::filesystem::copy_file(dir / "hdl.pcap", cut);
+  std::filesystem::resize_file(cut, std::filesystem::file_size(cut) - 100);
+  const auto survived = read_all(cut, &end_error, &damaged);
+  EXPECT_EQ(survived.size(), capture.size() - 1);
+  EXPECT_NE(end_error.find("truncated"), std::string::npos) << end_error;
+  EXPECT_EQ(damaged, 1U);
 }
 
 TEST(Recorder, ATapThatOverflowsDropsAndCountsWithoutBlockingTheProducer) {
