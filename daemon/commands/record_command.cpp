@@ -99,6 +99,7 @@ int run_record(const RecordArgs& args, const CLI::App& root) {
       const int sig = signals.wait(kTurn);
       if (sig == SIGINT || sig == SIGTERM) stopped_by = sig == SIGINT ? "SIGINT" : "SIGTERM";
       if (sig == SIGHUP) spdlog::info("SIGHUP ignored: livod does not reload its configuration");
+      if (sig == SIGUSR1) spdlog::info("SIGUSR1 ignored: livod record has no map to save");
       const HostTime now = host_now();
       drain(sources, sinks, now);
       if (args.max_duration_s > 0 && now - started >= from_seconds(args.max_duration_s)) {
