@@ -93,9 +93,10 @@ void add_run_command(CLI::App& app, CommandContext& ctx) {
                   "Estimator threads (default: the configuration's estimator.threads, 0 = one per "
                   "core)")
       ->check(CLI::Range(0, 256));
-  cmd->add_option("--record", args->record,
-                  "Also record the live sensors' raw data into this folder (like outputs.record; "
-                  "docs/record.md)");
+  cmd->add_option(
+      "--record", args->record,
+      "Also record the live sensors' raw data, into a new subfolder of this folder (like "
+      "outputs.record; docs/record.md)");
   cmd->callback([&ctx, &app, args] { ctx.exit_code = run(*args, app); });
 }
 

@@ -175,7 +175,7 @@ void read_output_file(MapReader& m, const ReadContext& context, std::string_view
   }
 }
 
-// outputs.record: a folder (created by the recorder) that must not hold a recording already.
+// outputs.record: a folder (created by the recorder); each run records into a new subfolder.
 void read_record_folder(MapReader& m, const ReadContext& context, std::filesystem::path& out) {
   const auto v = m.take("record");
   if (!v) return;

@@ -48,6 +48,19 @@ std::string utc_text(std::int64_t ns) {
 
 }  // namespace
 
+std::filesystem::path new_recording_folder(const std::filesystem::path& parent) {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char name[32];
+  std::strftime(name, sizeof(name), "%Y%m%dT%H%M%SZ", &tm);
+  std::filesystem::path folder = parent / name;
+  for (int n = 2; std::filesystem::exists(folder); ++n) {
+    folder = parent / (std::string(name) + "-" + std::to_string(n));
+  }
+  return folder;
+}
+
 bool is_recorded(const SensorConfig& sensor) {
   return sensor.enabled && is_packet_lidar(sensor.driver) &&
          std::holds_alternative<UdpSourceConfig>(sensor.source);

@@ -62,6 +62,12 @@ std::string recorded_config_text(const LivodConfig& config);
 std::vector<std::pair<std::filesystem::path, std::string>> recorded_files(
     const LivodConfig& config);
 
+// The folder of one recording of `livod run` under `parent` (outputs.record, --record): a new
+// subfolder named after the UTC start time, e.g. parent/20261126T071203Z (-2, -3, ... when it
+// exists), so that every start of the service, a restart by systemd included, records into its
+// own folder and none is overwritten.
+std::filesystem::path new_recording_folder(const std::filesystem::path& parent);
+
 // True for the sensors a recording holds: enabled live packet LiDARs over UDP.
 bool is_recorded(const SensorConfig& sensor);
 

@@ -150,7 +150,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   if (!record_dir.empty() && options.paced_replay) {
     spdlog::warn("outputs.record: not recording: replay --realtime reads recordings already");
   } else if (!record_dir.empty()) {
-    recording.emplace(config, record_dir);
+    recording.emplace(config, record::new_recording_folder(record_dir));
   }
 
   drivers::capture::Doorbell wake;  // capture/pacer threads -> scheduler

@@ -184,10 +184,16 @@ TEST(RecordSession, WritesAConfigurationThatReplaysTheRecordingAndRefusesToOverw
   EXPECT_EQ(std::filesystem::file_size(s.calibration), std::filesystem::file_size(calibration));
   EXPECT_TRUE(recorded.config.outputs.record.empty());
   EXPECT_TRUE(recorded.config.outputs.trajectory.empty());
-  // The folder holds a recording now: the configuration check and the session refuse it.
-  const ConfigResult again = load_config(config_path);
-  EXPECT_FALSE(again.ok());
+  // The folder holds a recording now: a session refuses it; `livod run` records into new
+  // subfolders of outputs.record.
   EXPECT_THROW(RecordSession(loaded.config, dir / "rec"), livod::Error);
+  const auto first = new_recording_folder(dir / "rec");
+  EXPECT_EQ(first.parent_path(), dir / "rec");
+  EXPECT_EQ(first.filename().string().size(), 16U) << first;  // 20261126T071203Z
+  std::filesystem::create_directories(first);
+  EXPECT_EQ(new_recording_folder(dir / "rec").filename().string().substr(0, 16),
+            first.filename().string());
+  EXPECT_NE(new_recording_folder(dir / "rec"), first);
 }
 
 TEST(RecordSession, SensorsThatCannotBeRecordedAreNotImplementedErrors) {
