@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
   livod::daemon::add_version_command(app, ctx);
   // COMMAND-REGISTRATIONS (one line per subcommand; keep sorted)
   livod::daemon::add_run_command(app, ctx);
+  livod::daemon::add_record_command(app, ctx);
   livod::daemon::add_replay_command(app, ctx);
   livod::daemon::add_decode_command(app, ctx);
   livod::daemon::add_inspect_command(app, ctx);

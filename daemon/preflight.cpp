@@ -5,6 +5,7 @@
 #include <string>
 
 #include "daemon/config/sensor_models.hpp"
+#include "daemon/record/record_session.hpp"
 #include "daemon/replay/decoder_factory.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/sources.hpp"
@@ -70,6 +71,13 @@ std::vector<ConfigProblem> check_config_files(const LivodConfig& config, bool op
       }
     } catch (const std::exception& e) {
       fail(sensor, i, file_key, e.what());
+    }
+  }
+  // outputs.record: the sensors must be recordable (daemon/record/record_session.hpp).
+  if (!config.outputs.record.empty()) {
+    for (auto& p : record::record_problems(config)) {
+      p.message = "outputs.record: " + p.message;
+      problems.push_back(std::move(p));
     }
   }
   return problems;

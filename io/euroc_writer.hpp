@@ -7,7 +7,8 @@
 // The timestamp is the frame's time on the common timeline (livod uses mid-exposure); the third
 // column is livod's extension (exposure duration, ns; 0 when unknown), read back by
 // parse_euroc_camera_csv.
-// For `livod record` (planned); the writer allocates (PNG encoding) and belongs on the IO thread.
+// For `livod record` once `livod run` runs cameras (docs/record.md); the writer allocates (PNG
+// encoding) and belongs on the IO thread.
 
 #include <cstdint>
 #include <filesystem>

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "io/pcap_records.hpp"
 
 namespace livod::io {
 
@@ -37,10 +38,6 @@ constexpr std::uint8_t kIpProtoUdp = 17;
 constexpr std::uint16_t kIpMoreFragments = 0x2000;
 constexpr std::uint16_t kIpOffsetMask = 0x1FFF;
 constexpr std::size_t kUdpHeader = 8;
-constexpr std::size_t kMaxUdpPayload = 65535 - kIpv4MinHeader - kUdpHeader;
-constexpr std::size_t kMinEthernetFrame = 60;  // without FCS; shorter frames are padded
-constexpr std::size_t kMinIpv4Mtu = 68;        // RFC 791: every host must accept this
-constexpr std::size_t kMaxIpv4Mtu = 65535;
 constexpr int kWriterSnaplen = 262144;  // libpcap's MAXIMUM_SNAPLEN
 constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 // Resynchronisation after a damaged record (see RecordScanner).
@@ -64,29 +61,6 @@ std::uint32_t le32(std::span<const std::byte> b, std::size_t at) {
   return std::to_integer<std::uint32_t>(b[at]) | (std::to_integer<std::uint32_t>(b[at + 1]) << 8) |
          (std::to_integer<std::uint32_t>(b[at + 2]) << 16) |
          (std::to_integer<std::uint32_t>(b[at + 3]) << 24);
-}
-
-void put16(std::byte* out, std::uint16_t v) {
-  out[0] = static_cast<std::byte>(v >> 8);
-  out[1] = static_cast<std::byte>(v & 0xFF);
-}
-
-void put32(std::byte* out, std::uint32_t v) {
-  put16(out, static_cast<std::uint16_t>(v >> 16));
-  put16(out + 2, static_cast<std::uint16_t>(v & 0xFFFF));
-}
-
-// Internet checksum (RFC 1071) accumulation over big-endian 16-bit words.
-std::uint32_t checksum_add(std::uint32_t sum, std::span<const std::byte> bytes) {
-  std::size_t i = 0;
-  for (; i + 1 < bytes.size(); i += 2) sum += be16(bytes, i);
-  if (i < bytes.size()) sum += std::to_integer<std::uint32_t>(bytes[i]) << 8;
-  return sum;
-}
-
-std::uint16_t checksum_finish(std::uint32_t sum) {
-  while ((sum >> 16) != 0) sum = (sum & 0xFFFF) + (sum >> 16);
-  return static_cast<std::uint16_t>(~sum & 0xFFFF);
 }
 
 // What the link layer carried: an IPv4 packet, something else, or a header that does not fit.
@@ -724,47 +698,23 @@ const InputLossLog& PcapReader::losses() const {
 }
 
 // ------------------------------------------------------------------------------------------------
-// Writer
+// Writer: the records come from UdpPcapEncoder (io/pcap_records.hpp), libpcap's dumper owns the
+// file and its header.
 
 struct PcapWriter::Impl {
   std::string source;
-  Options options;
   PcapHandle dead;
   DumperHandle dumper;
-  std::uint16_t next_ip_id = 1;
-  std::vector<std::byte> ip_payload;  // UDP header + data, reused
-  std::vector<std::byte> frame;       // one Ethernet frame, reused
+  UdpPcapEncoder encoder;
+  std::vector<std::byte> records;  // one datagram's records, reused
+
+  explicit Impl(const Options& options)
+      : encoder(PcapRecordFormat{options.nanosecond_resolution, options.mtu}) {}
 };
 
-namespace {
-
-void mac_for_ip(std::byte* mac, std::uint32_t ip) {
-  if ((ip >> 28) == 0xE) {  // 224.0.0.0/4: RFC 1112 multicast MAC 01:00:5e + low 23 bits
-    const std::uint32_t low = ip & 0x7FFFFF;
-    const std::byte prefix[3] = {std::byte{0x01}, std::byte{0x00}, std::byte{0x5E}};
-    std::memcpy(mac, prefix, 3);
-    mac[3] = static_cast<std::byte>(low >> 16);
-    mac[4] = static_cast<std::byte>((low >> 8) & 0xFF);
-    mac[5] = static_cast<std::byte>(low & 0xFF);
-  } else if (ip == 0xFFFFFFFF) {
-    std::memset(mac, 0xFF, 6);
-  } else {  // locally administered unicast MAC derived from the address
-    mac[0] = std::byte{0x02};
-    mac[1] = std::byte{0x00};
-    put32(mac + 2, ip);
-  }
-}
-
-}  // namespace
-
 PcapWriter::PcapWriter(const std::filesystem::path& path, Options options)
-    : impl_(std::make_unique<Impl>()) {
-  if (options.mtu < kMinIpv4Mtu || options.mtu > kMaxIpv4Mtu) {
-    throw std::invalid_argument("PcapWriter: mtu " + std::to_string(options.mtu) +
-                                " outside [68, 65535]");
-  }
+    : impl_(std::make_unique<Impl>(options)) {
   impl_->source = path.string();
-  impl_->options = options;
   const unsigned precision =
       options.nanosecond_resolution ? PCAP_TSTAMP_PRECISION_NANO : PCAP_TSTAMP_PRECISION_MICRO;
   impl_->dead.reset(pcap_open_dead_with_tstamp_precision(DLT_EN10MB, kWriterSnaplen, precision));
@@ -784,73 +734,10 @@ void PcapWriter::write_udp(std::int64_t capture_time_ns, std::uint32_t src_ip,
                            std::uint16_t src_port, std::uint32_t dst_ip, std::uint16_t dst_port,
                            std::span<const std::byte> payload) {
   Impl& s = *impl_;
-  if (payload.size() > kMaxUdpPayload) {
-    throw std::invalid_argument("PcapWriter: UDP payload of " + std::to_string(payload.size()) +
-                                " bytes exceeds 65507");
-  }
-  const std::int64_t seconds = capture_time_ns / kNsPerSecond;
-  const std::int64_t sub_second_ns = capture_time_ns % kNsPerSecond;
-  if (capture_time_ns < 0 || seconds > std::numeric_limits<std::uint32_t>::max()) {
-    throw std::invalid_argument("PcapWriter: time " + std::to_string(capture_time_ns) +
-                                " ns does not fit a pcap record");
-  }
-
-  // UDP header + payload, checksummed over the RFC 768 pseudo-header.
-  const std::size_t udp_length = kUdpHeader + payload.size();
-  s.ip_payload.resize(udp_length);
-  std::byte* udp = s.ip_payload.data();
-  put16(udp, src_port);
-  put16(udp + 2, dst_port);
-  put16(udp + 4, static_cast<std::uint16_t>(udp_length));
-  put16(udp + 6, 0);
-  if (!payload.empty()) std::memcpy(udp + kUdpHeader, payload.data(), payload.size());
-  std::byte pseudo[12];
-  put32(pseudo, src_ip);
-  put32(pseudo + 4, dst_ip);
-  pseudo[8] = std::byte{0};
-  pseudo[9] = std::byte{kIpProtoUdp};
-  put16(pseudo + 10, static_cast<std::uint16_t>(udp_length));
-  std::uint16_t udp_checksum = checksum_finish(checksum_add(checksum_add(0, pseudo), s.ip_payload));
-  if (udp_checksum == 0) udp_checksum = 0xFFFF;  // 0 means "no checksum" in UDP over IPv4
-  put16(udp + 6, udp_checksum);
-
-  // Every fragment but the last carries a multiple of 8 bytes (the offset unit).
-  const std::size_t max_chunk = ((s.options.mtu - kIpv4MinHeader) / 8) * 8;
-  const std::uint16_t ip_id = s.next_ip_id++;
-  pcap_pkthdr record{};
-  record.ts.tv_sec = static_cast<time_t>(seconds);
-  record.ts.tv_usec = static_cast<suseconds_t>(
-      s.options.nanosecond_resolution ? sub_second_ns : sub_second_ns / 1000);
-
-  for (std::size_t offset = 0; offset < udp_length; offset += max_chunk) {
-    const std::size_t chunk = std::min(max_chunk, udp_length - offset);
-    const bool more = offset + chunk < udp_length;
-    const std::size_t ip_length = kIpv4MinHeader + chunk;
-    const std::size_t frame_length = std::max(kEthernetHeader + ip_length, kMinEthernetFrame);
-    s.frame.assign(frame_length, std::byte{0});
-    std::byte* eth = s.frame.data();
-    mac_for_ip(eth, dst_ip);
-    mac_for_ip(eth + 6, src_ip);
-    put16(eth + 12, kEthertypeIpv4);
-
-    std::byte* ip = eth + kEthernetHeader;
-    ip[0] = std::byte{0x45};  // version 4, 5 header words
-    ip[1] = std::byte{0};
-    put16(ip + 2, static_cast<std::uint16_t>(ip_length));
-    put16(ip + 4, ip_id);
-    put16(ip + 6, static_cast<std::uint16_t>((more ? kIpMoreFragments : 0) | (offset / 8)));
-    ip[8] = std::byte{64};  // TTL
-    ip[9] = std::byte{kIpProtoUdp};
-    put32(ip + 12, src_ip);
-    put32(ip + 16, dst_ip);
-    put16(ip + 10, checksum_finish(checksum_add(0, {ip, kIpv4MinHeader})));
-    std::memcpy(ip + kIpv4MinHeader, s.ip_payload.data() + offset, chunk);
-
-    record.caplen = static_cast<bpf_u_int32>(frame_length);
-    record.len = static_cast<bpf_u_int32>(frame_length);
-    pcap_dump(reinterpret_cast<u_char*>(s.dumper.get()), &record,
-              reinterpret_cast<const u_char*>(s.frame.data()));
-  }
+  s.records.clear();
+  s.encoder.append(s.records, capture_time_ns, src_ip, src_port, dst_ip, dst_port, payload);
+  // The same bytes pcap_dump() writes: record headers in host order, then the frame.
+  std::fwrite(s.records.data(), 1, s.records.size(), pcap_dump_file(s.dumper.get()));
 }
 
 void PcapWriter::flush() {

@@ -1,8 +1,8 @@
 #pragma once
 // livod serial capture: the bytes a serial / USB IMU sent, in the chunks the host read them, each
 // with its receive time, so that a recorded stream replays through a StreamImuDecoder exactly as
-// the live reads did (torn messages included). The simulator writes it; `livod record` (planned)
-// will write it from the live source.
+// the live reads did (torn messages included). The simulator writes it; `livod record` is to write
+// it from the live source once `livod run` runs serial IMUs (docs/record.md).
 //
 // Layout (all little-endian):
 //   header  8 bytes  "LVSERCAP"

@@ -19,6 +19,7 @@
 #include "daemon/config/load_config.hpp"
 #include "daemon/logging.hpp"
 #include "daemon/preflight.hpp"
+#include "daemon/record/record_session.hpp"
 #include "daemon/runtime/daemon.hpp"
 #include "daemon/runtime/lcm_bus.hpp"
 
@@ -30,11 +31,18 @@ constexpr int kExitFailure = 1;
 struct RunArgs {
   std::string config;
   int threads = -1;
+  std::string record;
 };
 
 int run(const RunArgs& args, const CLI::App& root) {
   // The same file checks as check-config (recordings are opened by the run itself).
   ConfigResult loaded = load_checked_config(args.config, /*open_recordings=*/false);
+  if (loaded.ok() && !args.record.empty()) {
+    for (auto& p : record::record_problems(loaded.config)) {
+      p.message = "--record: " + p.message;
+      loaded.problems.push_back(std::move(p));
+    }
+  }
   for (const auto& problem : loaded.problems) {
     fmt::print(stderr, "{}\n", format_problem(loaded.source, problem));
   }
@@ -54,6 +62,7 @@ int run(const RunArgs& args, const CLI::App& root) {
     runtime::DaemonOptions options;
     options.bus = bus.get();
     options.threads = args.threads;
+    options.record_dir = args.record;
     options.notify_systemd = true;  // READY/STATUS/WATCHDOG/STOPPING when run by systemd
     const runtime::DaemonResult r = runtime::run_daemon(config, options);
     for (const auto& s : r.sensor_summaries) spdlog::info("{}", s);
@@ -84,6 +93,10 @@ void add_run_command(CLI::App& app, CommandContext& ctx) {
                   "Estimator threads (default: the configuration's estimator.threads, 0 = one per "
                   "core)")
       ->check(CLI::Range(0, 256));
+  cmd->add_option(
+      "--record", args->record,
+      "Also record the live sensors' raw data, into a new subfolder of this folder (like "
+      "outputs.record; docs/record.md)");
   cmd->callback([&ctx, &app, args] { ctx.exit_code = run(*args, app); });
 }
 

@@ -247,6 +247,9 @@ struct OutputsConfig {
   std::filesystem::path trajectory;     // TUM file; empty = none
   std::filesystem::path map_pcd;        // PCD written at shutdown; empty = none
   std::filesystem::path timing_report;  // per-stage timing; empty = none
+  // `livod run` also records its live sensors' raw data into a new subfolder of this folder per
+  // start (docs/record.md); empty = no recording.
+  std::filesystem::path record;
 };
 
 struct HealthConfig {

@@ -175,6 +175,26 @@ void read_output_file(MapReader& m, const ReadContext& context, std::string_view
   }
 }
 
+// outputs.record: a folder (created by the recorder); each run records into a new subfolder.
+void read_record_folder(MapReader& m, const ReadContext& context, std::filesystem::path& out) {
+  const auto v = m.take("record");
+  if (!v) return;
+  const auto text = parse_string(m.problems(), *v, true);
+  if (!text || text->empty()) return;
+  out = resolve_path(context, *text);
+  std::error_code ec;
+  if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec)) {
+    m.problems().error(ProblemKind::invalid_value, v->path, v->at,
+                       "'" + out.string() + "' is a file; give the recording's folder");
+    out.clear();
+  } else if (std::filesystem::exists(out / "config.yaml", ec)) {
+    m.problems().error(
+        ProblemKind::inconsistent, v->path, v->at,
+        "'" + out.string() + "' already holds a recording (config.yaml): give a new folder");
+    out.clear();
+  }
+}
+
 }  // namespace
 
 void read_outputs(MapReader& reader, const ReadContext& context, OutputsConfig& outputs) {
@@ -182,6 +202,7 @@ void read_outputs(MapReader& reader, const ReadContext& context, OutputsConfig& 
   read_output_file(reader, context, "trajectory", outputs.trajectory);
   read_output_file(reader, context, "map_pcd", outputs.map_pcd);
   read_output_file(reader, context, "timing_report", outputs.timing_report);
+  read_record_folder(reader, context, outputs.record);
   const std::array<std::pair<const char*, const std::filesystem::path*>, 3> files = {{
       {"trajectory", &outputs.trajectory},
       {"map_pcd", &outputs.map_pcd},

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "daemon/record/record_session.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/sources.hpp"
 #include "daemon/runtime/live_camera_source.hpp"
@@ -50,7 +51,8 @@ std::string device_origin(const SensorConfig& s, const DeviceSourceConfig& d) {
 }
 
 OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
-                        const DaemonOptions& options, drivers::capture::Doorbell& wake) {
+                        const DaemonOptions& options, drivers::capture::Doorbell& wake,
+                        record::Recorder* recorder) {
   OpenedSources out;
   LiveOptions lo;
   if (config.realtime.capture_priority > 0) lo.capture_priority = config.realtime.capture_priority;
@@ -58,6 +60,7 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
   lo.stale_after = from_seconds(config.health.stale_after_s);
   lo.ephemeral_ports = options.ephemeral_ports;
   lo.doorbell = &wake;
+  lo.recorder = recorder;
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
     if (!roles.unused_reason[i].empty()) continue;
     const SensorConfig& s = config.sensors[i];
@@ -160,9 +163,22 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
     if (const auto refused = lock_memory(); !refused.empty()) spdlog::warn("{}", refused);
   }
 
+  // Recording beside the estimator (outputs.record, run --record): the same capture threads also
+  // feed the recorder's taps; it writes on its own IO thread (daemon/record/).
+  const std::filesystem::path record_dir =
+      options.record_dir.empty() ? config.outputs.record : options.record_dir;
+  std::optional<record::RecordSession> recording;
+  if (!record_dir.empty() && options.paced_replay) {
+    spdlog::warn("outputs.record: not recording: replay --realtime reads recordings already");
+  } else if (!record_dir.empty()) {
+    recording.emplace(config, record::new_recording_folder(record_dir));
+  }
+
   drivers::capture::Doorbell wake;  // capture/pacer threads -> scheduler
-  OpenedSources opened = options.paced_replay ? open_paced(config, roles, options, wake)
-                                              : open_live(config, roles, options, wake);
+  OpenedSources opened =
+      options.paced_replay
+          ? open_paced(config, roles, options, wake)
+          : open_live(config, roles, options, wake, recording ? &recording->recorder() : nullptr);
 
   std::vector<SourceThread> source_threads;
   for (const auto& in : opened.inputs) {
@@ -252,6 +268,14 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   notifier.watch("update", [&scheduler] { return scheduler.update_beats(); });
   notifier.watch("publisher", [&publisher] { return publisher.heartbeat().beats(); });
   for (auto& t : source_threads) notifier.watch(t.name, t.beats);
+  if (recording) {
+    // In health, not in the watchdog: a slow disk loses recorded data (counted), it must not get
+    // the odometry restarted.
+    record::Recorder* recorder = &recording->recorder();
+    publisher.watch("recorder", [recorder] { return recorder->heartbeat().beats(); });
+    recording->start();
+    spdlog::info("recording the live sensors into {}", recording->dir().string());
+  }
   publisher.start();
 
   const Nanoseconds health_period = from_seconds(config.health.period_s);
@@ -337,6 +361,13 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   wake.ring();
   scheduler_thread.join();
   if (result.stopped_by.empty()) result.stopped_by = end_reason.empty() ? "error" : end_reason;
+  if (recording) {
+    // The capture threads have stopped: the recorder drains its taps and closes the files.
+    for (const auto& problem : recording->finish()) spdlog::warn("{}", problem);
+    for (const auto& s : recording->recorder().stats()) {
+      spdlog::info("record: {}", record::format_file_stats(s));
+    }
+  }
 
   result.errors = publisher.stop();
   if (!scheduler_error.empty()) result.errors.insert(result.errors.begin(), scheduler_error);

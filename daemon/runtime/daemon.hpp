@@ -36,6 +36,9 @@ struct DaemonOptions {
   std::vector<std::string> inputs;
   // Write trajectory.txt, map.pcd and timing.txt here instead of the configuration's outputs.
   std::optional<std::filesystem::path> out_dir;
+  // Record the live sensors' raw data into a new subfolder of this folder (`livod run --record`);
+  // empty: the configuration's outputs.record (docs/record.md).
+  std::filesystem::path record_dir;
   MessageBus* bus = nullptr;  // where poses and health go (LCM); null: nowhere
   int threads = -1;           // estimator threads; < 0: estimator.threads (0 there: one per core)
   std::size_t max_queued_scans = 4;  // the estimator's scan queue (whole scans dropped beyond)

@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "daemon/config/sensor_models.hpp"
+#include "daemon/record/recorder.hpp"
 #include "daemon/replay/decoder_factory.hpp"
 #include "drivers/capture/live_source.hpp"
 #include "drivers/livox/supervisor.hpp"
@@ -77,6 +78,18 @@ class LiveLidar final : public LiveLidarSource {
                   "set source.udp.sensor_address");
     }
 
+    // The destination address a recording writes into its frames: the multicast group, else the
+    // host address the sensor sends to when it can be told (0.0.0.0 otherwise).
+    std::uint32_t record_dst_ip = 0;
+    if (options.recorder != nullptr) {
+      try {
+        record_dst_ip = !udp->multicast_group.empty() ? io::parse_ipv4(udp->multicast_group)
+                                                      : host_ip_for(*udp, what);
+      } catch (const Error&) {
+        record_dst_ip = 0;
+      }
+    }
+
     drivers::capture::LiveSourceConfig lc;
     lc.name = sensor.name;
     lc.stale_after = options.stale_after;
@@ -95,6 +108,10 @@ class LiveLidar final : public LiveLidarSource {
       s.thread.cpu = options.capture_cpu;
       s.thread.reported_port = port;
       s.thread.doorbell = options.doorbell;
+      if (options.recorder != nullptr) {
+        s.thread.tap =
+            &options.recorder->add_packet_stream({sensor.name, name, slot, record_dst_ip});
+      }
       lc.streams.push_back(std::move(s));
       stream_names_.push_back(name);
     };

@@ -23,6 +23,10 @@
 #include "daemon/runtime/source.hpp"
 #include "drivers/capture/doorbell.hpp"
 
+namespace livod::daemon::record {
+class Recorder;
+}
+
 namespace livod::daemon::runtime {
 
 struct LiveOptions {
@@ -33,6 +37,9 @@ struct LiveOptions {
   bool ephemeral_ports = false;
   // Rung by the capture threads when they queue packets (wakes the scheduler). May be null.
   drivers::capture::Doorbell* doorbell = nullptr;
+  // Records every stream too (`livod record`, `outputs.record`): each capture thread also copies
+  // its datagrams into a tap ring of this recorder (daemon/record/recorder.hpp). May be null.
+  record::Recorder* recorder = nullptr;
 };
 
 class LiveLidarSource : public MeasurementSource {

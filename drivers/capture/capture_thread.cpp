@@ -92,7 +92,12 @@ void CaptureThread::run(const std::stop_token& stop) {
     const auto batch = socket_.receive_batch(config_.poll_timeout_ms);
     const std::uint64_t pushed_before = pushed;
     for (const io::ReceivedDatagram& d : batch) {
-      if (ring_.try_push(d.payload, d.rx, reported_port_, d.truncated)) ++pushed;
+      if (ring_.try_push(d.payload, d.rx, reported_port_, d.truncated, d.src_ip, d.src_port)) {
+        ++pushed;
+      }
+      if (config_.tap != nullptr) {
+        config_.tap->try_push(d.payload, d.rx, reported_port_, d.truncated, d.src_ip, d.src_port);
+      }
       last_rx_ns = d.rx.ns;
     }
     if (pushed != pushed_before && config_.doorbell != nullptr) config_.doorbell->ring();

@@ -34,6 +34,10 @@ struct CaptureThreadConfig {
   // Rung after each batch that pushed packets, to wake the consumer (the daemon's scheduler)
   // when it sleeps on empty rings; nullptr = the consumer polls. Must outlive the thread.
   Doorbell* doorbell = nullptr;
+  // A second ring every datagram is also copied into, independently of the first (a full tap
+  // drops and counts in its own ring, never in the consumer's): `livod record` and
+  // `outputs.record` (daemon/record/recorder.hpp). nullptr = none. Must outlive the thread.
+  PacketRing* tap = nullptr;
 };
 
 // Outcome of a scheduling request made by the capture thread for itself.

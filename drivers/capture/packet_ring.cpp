@@ -38,13 +38,13 @@ PacketRing::PacketRing(std::size_t capacity, std::size_t max_payload_bytes)
       arena_(std::make_unique<std::byte[]>(arena_bytes(slot_count_, stride_))) {}
 
 bool PacketRing::try_push(std::span<const std::byte> payload, HostTime rx, std::uint16_t dst_port,
-                          bool truncated) {
+                          bool truncated, std::uint32_t src_ip, std::uint16_t src_port) {
   const std::size_t length = std::min(payload.size(), max_payload_bytes_);
   std::byte* const slot = arena_.get() + next_slot_ * stride_;
   // Safe before knowing whether the push succeeds: see the header (slot reuse argument).
   if (length > 0) std::memcpy(slot, payload.data(), length);
-  const RawPacket packet{std::span<const std::byte>(slot, length), rx, dst_port,
-                         truncated || length < payload.size()};
+  const RawPacket packet{std::span<const std::byte>(slot, length), rx,     dst_port,
+                         truncated || length < payload.size(),     src_ip, src_port};
   if (!ring_.try_push(packet)) return false;
   next_slot_ = next_slot_ + 1 == slot_count_ ? 0 : next_slot_ + 1;
   return true;

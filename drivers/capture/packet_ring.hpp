@@ -37,6 +37,8 @@ struct RawPacket {
   HostTime rx;                 // kernel receive time (CLOCK_MONOTONIC)
   std::uint16_t dst_port = 0;  // the sensor port the datagram was sent to
   bool truncated = false;      // the datagram was longer than the slot (or the socket buffer)
+  std::uint32_t src_ip = 0;    // sender (host byte order); 0 when unknown (paced recordings)
+  std::uint16_t src_port = 0;  // the recorder writes them into its pcap (daemon/record/)
 };
 
 class PacketRing {
@@ -52,7 +54,7 @@ class PacketRing {
   // Copies `payload` (cut to max_payload_bytes, which then sets `truncated`) into the ring.
   // Returns false, and counts an overrun, when the ring is full. Never blocks, never allocates.
   bool try_push(std::span<const std::byte> payload, HostTime rx, std::uint16_t dst_port,
-                bool truncated = false);
+                bool truncated = false, std::uint32_t src_ip = 0, std::uint16_t src_port = 0);
 
   // ---- consumer ------------------------------------------------------------------------------
   // The oldest packet, or nullptr when the ring is empty. Valid until pop().

@@ -1,0 +1,227 @@
+#include "daemon/record/record_session.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <ctime>
+#include <set>
+#include <variant>
+
+#include "core/error.hpp"
+#include "daemon/replay/decoder_factory.hpp"
+#include "io/output_file.hpp"
+
+namespace livod::daemon::record {
+namespace {
+
+std::string sensor_path(std::size_t i) {
+  return "sensors[" + std::to_string(i) + "]";
+}
+
+ConfigProblem not_implemented(std::size_t i, const SensorConfig& s, std::string message) {
+  ConfigProblem p;
+  p.severity = Severity::error;
+  p.kind = ProblemKind::not_implemented;
+  p.path = sensor_path(i);
+  p.line = s.line;
+  p.message = "recording sensor '" + s.name + "' (" + std::string(enum_name(s.driver)) +
+              "): " + std::move(message);
+  return p;
+}
+
+std::string calibration_name(const SensorConfig& s) {
+  return s.name + ".calibration" + s.calibration.extension().string();
+}
+
+// "2026-11-26T06:40:12.123Z" for a UTC time in ns.
+std::string utc_text(std::int64_t ns) {
+  const std::time_t seconds = static_cast<std::time_t>(ns / 1'000'000'000);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char text[64];
+  std::snprintf(text, sizeof(text), "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
+                static_cast<int>((ns / 1'000'000) % 1000));
+  return text;
+}
+
+}  // namespace
+
+std::filesystem::path new_recording_folder(const std::filesystem::path& parent) {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char name[32];
+  std::strftime(name, sizeof(name), "%Y%m%dT%H%M%SZ", &tm);
+  std::filesystem::path folder = parent / name;
+  for (int n = 2; std::filesystem::exists(folder); ++n) {
+    folder = parent / (std::string(name) + "-" + std::to_string(n));
+  }
+  return folder;
+}
+
+bool is_recorded(const SensorConfig& sensor) {
+  return sensor.enabled && is_packet_lidar(sensor.driver) &&
+         std::holds_alternative<UdpSourceConfig>(sensor.source);
+}
+
+std::vector<ConfigProblem> record_problems(const LivodConfig& config) {
+  std::vector<ConfigProblem> out;
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const SensorConfig& s = config.sensors[i];
+    if (!s.enabled) continue;
+    if (std::holds_alternative<ReplaySourceConfig>(s.source)) {
+      out.push_back(not_implemented(
+          i, s, "it replays a recording: a recording is made from live sensors (copy the file)"));
+      continue;
+    }
+    if (!is_packet_lidar(s.driver)) {
+      out.push_back(not_implemented(
+          i, s,
+          "only packet LiDARs over UDP are recorded today; cameras (EuRoC folders), CAN IMUs "
+          "(candump logs) and serial IMUs (serial captures) are not (disable the sensor to "
+          "record the others)"));
+      continue;
+    }
+    const auto* udp = std::get_if<UdpSourceConfig>(&s.source);
+    if (udp == nullptr) continue;  // the configuration checks report it
+    if (s.driver == Driver::ouster && s.metadata.empty()) {
+      out.push_back(not_implemented(
+          i, s,
+          "an Ouster recording replays only with its metadata, and fetching it from the sensor "
+          "for the recording is not implemented: save it once (curl http://" +
+              (udp->sensor_address.empty() ? std::string("SENSOR") : udp->sensor_address) +
+              "/api/v1/sensor/metadata > " + s.name + ".json) and set `metadata:`"));
+      continue;
+    }
+    // The replay of the recording filters the pcap on the driver's default ports (a replay
+    // source cannot name ports yet): a LiDAR on other ports would replay nothing.
+    std::vector<std::uint16_t> defaults;
+    try {
+      defaults = replay::make_lidar_decoder(s)->default_ports();
+    } catch (const std::exception&) {
+      continue;  // the decoder's own problem is reported by the file checks
+    }
+    std::vector<std::uint16_t> configured = {udp->ports.lidar, udp->ports.position};
+    if (s.imu.enabled) configured.push_back(udp->ports.imu);
+    for (const std::uint16_t port : configured) {
+      if (port != 0 && std::find(defaults.begin(), defaults.end(), port) == defaults.end()) {
+        out.push_back(not_implemented(
+            i, s,
+            "port " + std::to_string(port) +
+                " is not one of the driver's default ports, and the replay of a recording reads "
+                "the default ports only (a replay source cannot name ports yet)"));
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<std::pair<std::filesystem::path, std::string>> recorded_files(
+    const LivodConfig& config) {
+  std::vector<std::pair<std::filesystem::path, std::string>> out;
+  for (const SensorConfig& s : config.sensors) {
+    if (!is_recorded(s)) continue;
+    if (!s.metadata.empty()) out.emplace_back(s.metadata, s.name + ".json");
+    if (!s.calibration.empty()) out.emplace_back(s.calibration, calibration_name(s));
+  }
+  return out;
+}
+
+std::string recorded_config_text(const LivodConfig& config) {
+  if (config.source_file.empty()) {
+    throw Error("a recording rewrites the configuration file: load it from a file");
+  }
+  YAML::Node root = YAML::LoadFile(config.source_file.string());
+  YAML::Node sensors = root["sensors"];
+  for (std::size_t i = 0; sensors && i < sensors.size(); ++i) {
+    YAML::Node node = sensors[i];
+    const auto name = node["name"].as<std::string>("");
+    const auto it = std::find_if(config.sensors.begin(), config.sensors.end(),
+                                 [&](const SensorConfig& s) { return s.name == name; });
+    if (it == config.sensors.end()) continue;
+    const SensorConfig& s = *it;
+    if (is_recorded(s)) {
+      YAML::Node source;
+      source["replay"]["file"] = s.name + ".pcap";
+      node["source"] = source;
+      if (!s.metadata.empty()) node["metadata"] = s.name + ".json";
+      if (!s.calibration.empty()) node["calibration"] = calibration_name(s);
+      continue;
+    }
+    // Not recorded (disabled): its files keep pointing at the originals.
+    if (!s.metadata.empty()) node["metadata"] = s.metadata.string();
+    if (!s.calibration.empty()) node["calibration"] = s.calibration.string();
+    if (const auto* r = std::get_if<ReplaySourceConfig>(&s.source); r && node["source"]["replay"]) {
+      node["source"]["replay"]["file"] = r->file.string();
+    }
+  }
+  if (YAML::Node outputs = root["outputs"]; outputs && outputs.IsMap()) {
+    for (const char* key : {"record", "trajectory", "map_pcd", "timing_report"}) {
+      outputs.remove(key);
+    }
+  }
+  YAML::Emitter emitter;
+  emitter << root;
+  return "# Written by `livod record` from " + config.source_file.string() +
+         ": the recorded sensors\n# read their files in this folder. Replay with\n"
+         "#   livod replay --config config.yaml -o OUT\n" +
+         std::string(emitter.c_str()) + "\n";
+}
+
+RecordSession::RecordSession(const LivodConfig& config, std::filesystem::path dir,
+                             RecorderOptions options)
+    : dir_(std::move(dir)),
+      recorder_([&] {
+        if (std::filesystem::exists(dir_ / "config.yaml")) {
+          throw Error(dir_.string() +
+                      " already holds a recording (config.yaml): choose another "
+                      "folder");
+        }
+        const auto problems = record_problems(config);
+        if (!problems.empty()) throw Error(problems.front().message);
+        options.dir = dir_;
+        return options;
+      }()),
+      started_(host_now()) {
+  for (const auto& [from, name] : recorded_files(config)) {
+    std::error_code ec;
+    std::filesystem::copy_file(from, dir_ / name, std::filesystem::copy_options::overwrite_existing,
+                               ec);
+    if (ec) throw Error("cannot copy " + from.string() + " into the recording: " + ec.message());
+  }
+  io::write_file(dir_ / "config.yaml", recorded_config_text(config));
+}
+
+std::vector<std::string> RecordSession::finish() {
+  if (finished_) return {};
+  finished_ = true;
+  std::vector<std::string> problems = recorder_.stop();
+  const double seconds = to_seconds(host_now() - started_);
+  std::string text = "# livod recording\nstarted " +
+                     utc_text(started_.ns + recorder_.realtime_offset_ns()) + ", recorded for " +
+                     std::to_string(static_cast<int>(seconds + 0.5)) + " s\n";
+  for (const FileStats& s : recorder_.stats()) {
+    text += "\n" + format_file_stats(s) + "\n";
+    text += "  streams:";
+    for (const auto& stream : s.streams) text += " " + stream;
+    text += "\n";
+    if (s.first_ns != 0) {
+      text += "  records from " + utc_text(s.first_ns) + " to " + utc_text(s.last_ns) + "\n";
+    }
+    for (const LossSpan& l : s.losses) {
+      text += "  lost " + std::to_string(l.packets) + " packets from " + utc_text(l.first_ns) +
+              " to " + utc_text(l.last_ns) + ": " + l.reason + "\n";
+    }
+  }
+  try {
+    io::write_file(dir_ / "recording.txt", text);
+  } catch (const std::exception& e) {
+    problems.push_back(e.what());
+  }
+  return problems;
+}
+
+}  // namespace livod::daemon::record

@@ -1,0 +1,141 @@
+#pragma once
+// The recorder of `livod record` and `outputs.record` (docs/record.md): raw sensor data to files
+// on its own IO thread, never slowing the capture threads or the scheduler down.
+//
+//   capture thread ──tap (PacketRing: bounded, full ⇒ drop + count)──▶ recorder thread
+//                                                                      ─▶ <sensor>.pcap (blocks)
+//
+// Each capture thread copies every datagram into a tap ring owned by the recorder, beside its own
+// ring to the scheduler (CaptureThreadConfig::tap). The recorder thread merges a LiDAR's streams
+// (lidar, IMU, position ports) in receive-time order into one classic pcap per LiDAR: valid
+// Ethernet/IPv4/UDP frames whose record time is the kernel receive time (CLOCK_MONOTONIC moved
+// onto UTC by one offset taken when the recorder starts, so the file never jumps with NTP).
+// Records are collected into blocks written with one write each (io/block_file.hpp): a block is
+// written when it is full or `flush_period` after its first record, so a killed process loses at
+// most that much and leaves a file that ends at a record boundary or inside its last record.
+//
+// Losses are counted per file with the reason and the span of recording time they cover:
+//   - buffer full: the tap ring overflowed because the recorder (the disk) fell behind;
+//   - write failed: a block could not be written (disk full, I/O error); its records are lost,
+//     the file is cut back to its last complete block, and writing is retried every
+//     `retry_period` (records arriving meanwhile are lost with the same reason);
+//   - truncated: a datagram longer than its slot (it would be a wrong packet in the file).
+//
+// Devices (cameras, CAN and serial IMUs) plug in as further kinds of recorded stream with their
+// own writers (io/euroc_writer.hpp, io/candump.hpp, io/serial_capture.hpp) and the same loss
+// accounting; only packet LiDARs are recorded today (record_plan.hpp refuses the rest).
+//
+// Threads: add_packet_stream() and start() on the owning thread (packets a capture thread pushes
+// before start() wait in the tap); stop() after the capture threads stopped (it drains the taps);
+// stats() and heartbeat() from any thread.
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/time.hpp"
+#include "daemon/runtime/heartbeat.hpp"
+#include "drivers/capture/packet_ring.hpp"
+
+namespace livod::daemon::record {
+
+struct RecorderOptions {
+  std::filesystem::path dir;                       // created if missing
+  std::size_t block_bytes = std::size_t{1} << 20;  // one write(2) per block
+  Nanoseconds flush_period{200'000'000};           // a partly filled block waits at most this long
+  // Packets younger than this wait for the LiDAR's other streams, so that a file's records are in
+  // receive-time order across its ports (a capture thread may push a little late).
+  Nanoseconds hold_back{50'000'000};
+  Nanoseconds sync_period{2'000'000'000};   // fdatasync: survives a power loss up to here
+  Nanoseconds retry_period{1'000'000'000};  // after a failed write, the next attempt
+  // Tap ring memory per stream: capacity = this / slot size, within [256, 16384] packets.
+  std::size_t stream_buffer_bytes = std::size_t{16} << 20;
+};
+
+// One UDP stream of a LiDAR to record into `<sensor>.pcap`.
+struct PacketStreamSpec {
+  std::string sensor;              // the file is <sensor>.pcap
+  std::string stream;              // "lidar", "imu", "position"
+  std::size_t slot_bytes = 65536;  // the largest datagram of the port (the capture ring's slot)
+  std::uint32_t dst_ip = 0;        // written as the frames' destination (host order; 0 unknown)
+};
+
+struct LossSpan {
+  std::string reason;         // "buffer full (disk too slow)", "write failed: No space left ..."
+  std::int64_t first_ns = 0;  // recording time (the pcap's clock, UTC ns) of the first loss
+  std::int64_t last_ns = 0;   // ... and of the last one in this span
+  std::uint64_t packets = 0;
+  std::uint64_t bytes = 0;  // payload bytes (0 for buffer overflows: never seen)
+};
+
+struct FileStats {
+  std::string sensor;
+  std::filesystem::path file;
+  std::vector<std::string> streams;
+  std::uint64_t packets = 0;        // datagrams written
+  std::uint64_t payload_bytes = 0;  // their UDP payload bytes
+  std::uint64_t file_bytes = 0;     // the file's size
+  std::int64_t first_ns = 0;        // first and last record time written (UTC ns); 0: none
+  std::int64_t last_ns = 0;
+  std::uint64_t lost_buffer_full = 0;
+  std::uint64_t lost_write_failed = 0;
+  std::uint64_t lost_truncated = 0;
+  std::vector<LossSpan> losses;  // in time order; consecutive losses of one reason merged
+  std::string last_error;        // the last write error ("No space left on device"), or empty
+  [[nodiscard]] std::uint64_t lost() const {
+    return lost_buffer_full + lost_write_failed + lost_truncated;
+  }
+};
+
+class Recorder {
+ public:
+  // Creates the folder. Throws livod::Error if it cannot.
+  explicit Recorder(RecorderOptions options);
+  ~Recorder();
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  // Before start(): opens <sensor>.pcap on the sensor's first stream (writes its header; throws
+  // livod::Error naming the file) and returns the tap ring the stream's capture thread pushes
+  // into. The ring lives as long as the recorder.
+  drivers::capture::PacketRing& add_packet_stream(const PacketStreamSpec& spec);
+
+  void start();
+  // Drains every tap (call once the capture threads stopped), writes the last blocks, syncs and
+  // closes the files, joins the thread. Returns what went wrong (losses, errors), one line each.
+  // Idempotent.
+  std::vector<std::string> stop();
+
+  // Any thread: a snapshot (refreshed by the recorder thread once per turn).
+  [[nodiscard]] std::vector<FileStats> stats() const;
+  [[nodiscard]] const runtime::Heartbeat& heartbeat() const { return heartbeat_; }
+  [[nodiscard]] const std::filesystem::path& dir() const { return options_.dir; }
+  // UTC = monotonic + this (the offset every record time uses).
+  [[nodiscard]] std::int64_t realtime_offset_ns() const { return realtime_offset_ns_; }
+
+ private:
+  struct File;
+  void run(const std::stop_token& stop);
+  bool turn(HostTime now, bool final);
+  void publish_stats();
+
+  RecorderOptions options_;
+  std::int64_t realtime_offset_ns_ = 0;
+  std::vector<std::unique_ptr<File>> files_;
+  runtime::Heartbeat heartbeat_;
+  mutable std::mutex stats_mutex_;
+  std::vector<FileStats> stats_;
+  bool started_ = false;
+  bool stopped_ = false;
+  std::jthread thread_;  // last
+};
+
+// One line per file for logs and reports: "os1.pcap: 12345 packets, 15.2 MB, 0 lost".
+std::string format_file_stats(const FileStats& s);
+
+}  // namespace livod::daemon::record
