@@ -2,7 +2,10 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <chrono>
 #include <vector>
+
+#include "core/error.hpp"
 
 #include "lcmtypes/livod/command_result_t.hpp"
 #include "lcmtypes/livod/command_t.hpp"
@@ -94,6 +97,66 @@ std::uint64_t LcmCommandChannel::malformed() const {
 
 std::uint64_t LcmCommandChannel::failed() const {
   return impl_->failed;
+}
+
+namespace {
+
+struct ResultWaiter {
+  std::int64_t request_id = 0;
+  std::optional<CommandResultRecord> result;
+
+  void on_result(const lcm::ReceiveBuffer* /*rbuf*/, const std::string& /*channel*/,
+                 const livod::command_result_t* m) {
+    if (m->request_id != request_id || result) return;
+    CommandResultRecord r;
+    r.unix_time_ns = m->utime * 1000;
+    r.request_id = m->request_id;
+    r.requested_by = m->requested_by;
+    r.command = m->command;
+    r.status = static_cast<CommandStatus>(m->status);
+    r.message = m->message;
+    r.coalesced = m->coalesced;
+    r.path = m->path;
+    r.points = m->points;
+    r.bytes = m->bytes;
+    r.save_number = m->save_number;
+    r.snapshot_unix_ns = m->snapshot_utime * 1000;
+    r.duration_s = m->duration_s;
+    result = std::move(r);
+  }
+};
+
+}  // namespace
+
+std::optional<CommandResultRecord> send_command(const std::string& url,
+                                                const std::string& command_channel,
+                                                const std::string& result_channel,
+                                                const CommandRecord& command, int timeout_ms) {
+  lcm::LCM lcm(url);
+  if (!lcm.good()) throw Error("cannot initialise LCM with URL '" + url + "'");
+  ResultWaiter waiter;
+  waiter.request_id = command.request_id;
+  lcm.subscribe(result_channel, &ResultWaiter::on_result, &waiter);
+  livod::command_t m;
+  m.utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                std::chrono::system_clock::now().time_since_epoch())
+                .count();
+  m.request_id = command.request_id;
+  m.sender = command.sender;
+  m.command = command.command;
+  m.argument = command.argument;
+  if (lcm.publish(command_channel, &m) != 0) {
+    throw Error("cannot send the command on " + command_channel + " (LCM URL '" + url + "')");
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (!waiter.result) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+                          deadline - std::chrono::steady_clock::now())
+                          .count();
+    if (left <= 0) break;
+    lcm.handleTimeout(static_cast<int>(std::min<long long>(left, 100)));
+  }
+  return waiter.result;
 }
 
 }  // namespace livod::daemon::publish

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,5 +42,14 @@ class LcmCommandChannel {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// The client side (`livod save-map`): sends `command` on LCM at `url` to `command_channel` and
+// waits up to `timeout_ms` for the livod.command_result_t with its request_id on
+// `result_channel`. Returns nullopt on timeout; throws livod::Error when LCM cannot start on
+// `url` or the command cannot be sent.
+std::optional<CommandResultRecord> send_command(const std::string& url,
+                                                const std::string& command_channel,
+                                                const std::string& result_channel,
+                                                const CommandRecord& command, int timeout_ms);
 
 }  // namespace livod::daemon::publish

@@ -61,6 +61,10 @@ void MapSaveService::finish(const replay::MapAccumulator* map, MessageBus* bus) 
   if (!new_requests_.empty()) start_or_join(map, bus);
   if (const auto outcome = saver_.wait()) answer(*outcome, bus);
   if (options_.enabled && options_.at_stop) {
+    if (map == nullptr || map->size() == 0) {
+      spdlog::info("no map to save at stop: no scan was registered");
+      return;
+    }
     new_requests_.push_back({0, "stop", false});
     ++stats_.requests;
     start_or_join(map, bus);
