@@ -9,6 +9,7 @@
 # estimator's per-scan wall time from OUTDIR/timing.txt (0.02 ms bins up to 20 ms, then 1 ms).
 #
 #   bench/map_save_bench.sh [BUILD_DIR] [PAIRS] [SAVE_PERIOD_S]
+#   SIM_DIR=FOLDER bench/map_save_bench.sh ...   reuse a simulated street_vehicle_os1_128 folder
 #
 # BUILD_DIR defaults to build/release (target livod), PAIRS to 3, SAVE_PERIOD_S to 2. Run it with
 # the normal priority (not under `nice`: a niced daemon measures the other tenants of the machine)
@@ -24,8 +25,14 @@ work=$(mktemp -d "${TMPDIR:-/tmp}/livod-map-save-bench.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 
 duration=${DURATION_S:-40}
-nice -n 19 "$livod" sim --scenario street_vehicle_os1_128 --duration "$duration" --no-images \
-  -o "$work/sim" > /dev/null
+if [ -n "${SIM_DIR:-}" ]; then
+  # A folder an earlier `livod sim --scenario street_vehicle_os1_128` wrote (it takes minutes).
+  mkdir -p "$work/sim" && cp "$SIM_DIR/config.yaml" "$SIM_DIR/os1.json" "$work/sim/"
+  ln -s "$(realpath "$SIM_DIR/os1.pcap")" "$work/sim/os1.pcap"
+else
+  nice -n 19 "$livod" sim --scenario street_vehicle_os1_128 --duration "$duration" --no-images \
+    -o "$work/sim" > /dev/null
+fi
 # The daemon's own outputs only (no LCM: no subscriber), saves replacing one file.
 sed -e '/^outputs:/,$d' "$work/sim/config.yaml" > "$work/sim/bench.yaml"
 cat >> "$work/sim/bench.yaml" <<YAML

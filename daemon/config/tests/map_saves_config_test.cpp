@@ -31,7 +31,7 @@ TEST(ConfigMapSaves, Defaults) {
 }
 
 TEST(ConfigMapSaves, ValuesAreReadAndFoldersChecked) {
-  const auto dir = test::temp_dir("config-map-saves");
+  const auto dir = livod::test::temp_dir("config-map-saves");
   {
     const auto r = load(minimal_config() + "outputs:\n  map_saves: {enabled: false, directory: " +
                         dir.string() + ", overwrite: true, at_stop: true}\n");

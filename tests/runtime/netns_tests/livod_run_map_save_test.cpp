@@ -1,7 +1,8 @@
 // The real `livod run` process saves its map on SIGUSR1 while it runs, inside the private network
 // namespace scripts/netns-run.sh provides (the sensor's fixed ports on loopback). The test is the
 // robot: it streams a simulated Mid-360 capture over UDP at the recorded pace and sends SIGUSR1
-// twice, seconds apart. Each signal gives a new, complete binary PCD in the configured map folder
+// twice, seconds apart, then runs `livod save-map` (the request over LCM udpm, answered with the
+// file's path). Each request gives a new, complete binary PCD in the configured map folder
 // (no partial file left), the daemon keeps estimating (the trajectory covers the whole capture and
 // the map at stop holds more points than the first save), and SIGTERM stops it with exit code 0.
 // PCL reads these files: tests/runtime/pcl_tests/map_save_pcl_test.cpp.
@@ -91,7 +92,8 @@ TEST(LivodRunMapSave, Sigusr1SavesTheMapWhileRunning) {
   ASSERT_NE(o, std::string::npos) << "unexpected simulator outputs";
   text.replace(o, outputs.size(),
                "outputs:\n  trajectory: " + (out / "trajectory.txt").string() +
-                   "\n  map_pcd: " + (out / "map.pcd").string() + "\n  lcm: null\n" +
+                   "\n  map_pcd: " + (out / "map.pcd").string() +
+                   "\n  lcm: {url: \"udpm://239.255.76.67:7667?ttl=0\"}\n" +
                    "  map_saves: {directory: " + maps.string() + "}\n");
   const auto config = out / "live.yaml";
   std::ofstream(config) << text;
@@ -123,6 +125,14 @@ TEST(LivodRunMapSave, Sigusr1SavesTheMapWhileRunning) {
   livod.signal(SIGUSR1);
   ASSERT_TRUE(wait_for([&] { return maps_in(maps).size() == 2; }, 10s))
       << test::read_text_file(log);
+  // `livod save-map` asks over LCM (udpm on the namespace's loopback) and prints the file.
+  const auto save_map_out = out / "save-map.txt";
+  const int save_map =
+      test::run_process({LIVOD_BINARY, "save-map", "--config", config.string(), "--timeout", "20"},
+                        {.output = save_map_out}, 30s);
+  EXPECT_EQ(save_map, 0) << test::read_text_file(save_map_out) << test::read_text_file(log);
+  EXPECT_EQ(test::read_text_file(save_map_out).find((maps / "map-").string()), 0U)
+      << test::read_text_file(save_map_out);
   sender.join();
   std::this_thread::sleep_for(1s);
   EXPECT_TRUE(livod.running()) << "the daemon stopped after the saves";
@@ -132,10 +142,10 @@ TEST(LivodRunMapSave, Sigusr1SavesTheMapWhileRunning) {
   EXPECT_EQ(*status, 0) << test::read_text_file(log);
 
   const auto files = maps_in(maps);
-  ASSERT_EQ(files.size(), 2U);
+  ASSERT_EQ(files.size(), 3U);  // two SIGUSR1, one livod save-map
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(maps),
                           std::filesystem::directory_iterator()),
-            2)
+            3)
       << "a partial file was left in " << maps;
   const std::size_t second_points = pcd_points(files[1]);
   const std::size_t final_points = pcd_points(out / "map.pcd");

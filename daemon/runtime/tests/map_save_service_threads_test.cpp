@@ -1,7 +1,10 @@
 // Map saves on request (runtime/map_save_service.hpp, map_saver.hpp): file names, atomic writes,
 // overwrite mode, errors reported instead of thrown, commands answered, requests that arrive while
 // a save runs coalesced into it, disabled saving rejected. The file content is compared with the
-// map's points byte for byte here; daemon/runtime/pcl_tests loads the files with PCL.
+// map's points byte for byte here; tests/runtime/pcl_tests loads the files with PCL.
+//
+// Label "threads" (ThreadSanitizer in CI): the map writer thread reads the map while the test
+// thread appends to it, and hands its outcome back.
 
 #include <gtest/gtest.h>
 
