@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
   livod::daemon::add_sim_command(app, ctx);
   livod::daemon::add_check_config_command(app, ctx);
   livod::daemon::add_eval_command(app, ctx);
+  livod::daemon::add_save_map_command(app, ctx);
 
   app.parse_complete_callback([&log_config] {
     // The logger's thread starts here: with livod's signals blocked, so that it never takes a

@@ -23,5 +23,6 @@ void add_inspect_command(CLI::App& app, CommandContext& ctx);
 void add_sim_command(CLI::App& app, CommandContext& ctx);
 void add_check_config_command(CLI::App& app, CommandContext& ctx);
 void add_eval_command(CLI::App& app, CommandContext& ctx);
+void add_save_map_command(CLI::App& app, CommandContext& ctx);
 
 }  // namespace livod::daemon

@@ -223,6 +223,8 @@ struct LcmChannelNames {
   std::string health = "LIVOD_HEALTH";      // livod.health_t, once per health period
   std::string cloud = "LIVOD_CLOUD";        // livod.cloud_t, one per filter update
   std::string bot_core_pose = "POSE_BODY";  // libbot2's bot_core.pose_t
+  std::string command = "LIVOD_COMMAND";    // livod.command_t, requests to livod (subscribed)
+  std::string command_result = "LIVOD_COMMAND_RESULT";  // livod.command_result_t, the answers
 };
 
 struct LcmOutputConfig {
@@ -242,6 +244,20 @@ struct LcmOutputConfig {
   [[nodiscard]] std::string channel(const std::string& name) const { return name + channel_suffix; }
 };
 
+// Map saves on request (SIGUSR1, livod.command_t COMMAND_SAVE_MAP) and at stop, while running
+// (docs/deploy.md "Saving the map").
+struct MapSavesConfig {
+  bool enabled = true;  // the map is accumulated and SIGUSR1 / the LCM command save it
+  // Where saves go; empty = the default: $STATE_DIRECTORY/maps under systemd, else OUTDIR/maps for
+  // `replay --realtime -o OUTDIR`, else ./maps (the default folder is created; a configured one
+  // must exist).
+  std::filesystem::path directory;
+  // false: every save is a new file (map-<UTC time>-<number>.pcd); true: each save replaces
+  // DIRECTORY/map.pcd (atomically).
+  bool overwrite = false;
+  bool at_stop = false;  // also save one when the daemon stops
+};
+
 struct OutputsConfig {
   LcmOutputConfig lcm;
   std::filesystem::path trajectory;     // TUM file; empty = none
@@ -250,6 +266,7 @@ struct OutputsConfig {
   // `livod run` also records its live sensors' raw data into a new subfolder of this folder per
   // start (docs/record.md); empty = no recording.
   std::filesystem::path record;
+  MapSavesConfig map_saves;
 };
 
 struct HealthConfig {

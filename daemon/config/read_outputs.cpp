@@ -80,7 +80,7 @@ void read_lcm(ProblemList& problems, const Value& value, LcmOutputConfig& lcm) {
   m.read("cloud_max_points", lcm.cloud_max_points, 100, 10000000);
   m.read("publish_bot_core_pose", lcm.publish_bot_core_pose);
 
-  // channels: {pose, pose_imu, health, cloud, bot_core_pose}
+  // channels: {pose, pose_imu, health, cloud, bot_core_pose, command, command_result}
   struct Channel {
     const char* key;
     std::string* name;
@@ -90,12 +90,14 @@ void read_lcm(ProblemList& problems, const Value& value, LcmOutputConfig& lcm) {
     std::string path;
     Position at;
   };
-  std::array<Channel, 5> channels = {{
+  std::array<Channel, 7> channels = {{
       {"pose", &lcm.channels.pose, true},
       {"pose_imu", &lcm.channels.pose_imu, lcm.publish_imu_rate},
       {"health", &lcm.channels.health, true},
       {"cloud", &lcm.channels.cloud, lcm.publish_cloud},
       {"bot_core_pose", &lcm.channels.bot_core_pose, lcm.publish_bot_core_pose},
+      {"command", &lcm.channels.command, true},
+      {"command_result", &lcm.channels.command_result, true},
   }};
   MapReader cm = m.map("channels");
   for (Channel& c : channels) {
@@ -195,6 +197,32 @@ void read_record_folder(MapReader& m, const ReadContext& context, std::filesyste
   }
 }
 
+// map_saves: {enabled, directory, overwrite, at_stop}. A configured folder must exist when the
+// daemon runs (a warning here: it may be created by the service's StateDirectory=).
+void read_map_saves(MapReader& outputs, const ReadContext& context, MapSavesConfig& saves) {
+  MapReader m = outputs.map("map_saves");
+  m.read("enabled", saves.enabled);
+  if (const auto v = m.take("directory"); v && !v->node.IsNull()) {
+    if (const auto text = parse_string(m.problems(), *v, true); text && !text->empty()) {
+      saves.directory = resolve_path(context, *text);
+      std::error_code ec;
+      if (std::filesystem::exists(saves.directory, ec) &&
+          !std::filesystem::is_directory(saves.directory, ec)) {
+        m.problems().error(ProblemKind::invalid_value, v->path, v->at,
+                           "'" + saves.directory.string() + "' is not a folder");
+        saves.directory.clear();
+      } else if (!std::filesystem::is_directory(saves.directory, ec)) {
+        m.problems().warning(ProblemKind::missing_file, v->path, v->at,
+                             "folder '" + saves.directory.string() +
+                                 "' does not exist (yet); livod does not create it");
+      }
+    }
+  }
+  m.read("overwrite", saves.overwrite);
+  m.read("at_stop", saves.at_stop);
+  m.finish();
+}
+
 }  // namespace
 
 void read_outputs(MapReader& reader, const ReadContext& context, OutputsConfig& outputs) {
@@ -203,6 +231,7 @@ void read_outputs(MapReader& reader, const ReadContext& context, OutputsConfig& 
   read_output_file(reader, context, "map_pcd", outputs.map_pcd);
   read_output_file(reader, context, "timing_report", outputs.timing_report);
   read_record_folder(reader, context, outputs.record);
+  read_map_saves(reader, context, outputs.map_saves);
   const std::array<std::pair<const char*, const std::filesystem::path*>, 3> files = {{
       {"trajectory", &outputs.trajectory},
       {"map_pcd", &outputs.map_pcd},

@@ -106,6 +106,16 @@ std::string summarize_config(const LivodConfig& config) {
   out << "; trajectory " << file_or_none(config.outputs.trajectory) << "; map "
       << file_or_none(config.outputs.map_pcd) << "; timing "
       << file_or_none(config.outputs.timing_report) << '\n';
+  const auto& saves = config.outputs.map_saves;
+  out << "map saves (SIGUSR1, livod save-map): ";
+  if (saves.enabled) {
+    out << (saves.directory.empty() ? std::string("$STATE_DIRECTORY/maps, else ./maps")
+                                    : saves.directory.string())
+        << (saves.overwrite ? ", each replacing map.pcd" : ", numbered files")
+        << (saves.at_stop ? ", and at stop" : "") << '\n';
+  } else {
+    out << "off\n";
+  }
   return out.str();
 }
 

@@ -39,6 +39,13 @@ class MapAccumulator {
   // Heap bytes held (point storage + table capacity).
   [[nodiscard]] std::size_t bytes() const;
   [[nodiscard]] const std::vector<float>& xyz() const { return xyz_; }
+
+  // Reserves the point storage for the whole budget (12 bytes per point; untouched pages cost no
+  // RAM unless memory is locked). From then on the points never move and a point once added is
+  // never written again, so the first size() points at xyz().data() are a snapshot another thread
+  // may read while add() appends after them: the daemon saves its map that way without copying
+  // it (runtime/map_saver.hpp).
+  void reserve_budget() { xyz_.reserve(3 * max_points_); }
   // Colours of the points added with one (empty when none were).
   [[nodiscard]] const std::vector<std::uint32_t>& rgb() const { return rgb_; }
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <cstdlib>
 #include <thread>
 
 #include "core/error.hpp"
@@ -197,6 +198,15 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
     po.map_pcd = config.outputs.map_pcd;
     po.timing_report = config.outputs.timing_report;
   }
+  // Map saves on request: the folder per map_save_service.hpp (configured, OUTDIR/maps,
+  // $STATE_DIRECTORY/maps, ./maps).
+  const auto& saves = config.outputs.map_saves;
+  po.map_saves.enabled = saves.enabled;
+  po.map_saves.at_stop = saves.at_stop;
+  po.map_saves.saver =
+      map_saver_options(saves.directory, options.out_dir.value_or(std::filesystem::path()),
+                        std::getenv("STATE_DIRECTORY"), saves.overwrite);
+  po.map_saves.saver.before_write = options.map_save_hook;
   po.map_cell_m = options.map_cell_m;
   po.map_max_points = options.map_max_points;
   po.publish_cloud = options.bus != nullptr && lcm.publish_cloud;
@@ -219,7 +229,8 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   }
   PublisherChannels::Sizes sizes;
   if (po.publish_cloud) sizes.cloud_points = static_cast<std::size_t>(lcm.cloud_max_points);
-  if (!po.map_pcd.empty()) sizes.cloud_points = std::max(sizes.cloud_points, kMapPointsPerFrame);
+  if (!po.map_pcd.empty() || po.map_saves.enabled)
+    sizes.cloud_points = std::max(sizes.cloud_points, kMapPointsPerFrame);
   PublisherChannels channels(sizes);
   LiveOutputsOptions lo;
   lo.imu_poses = options.bus != nullptr && lcm.publish_imu_rate;
@@ -354,7 +365,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
       break;
     }
     if (s == SIGHUP) spdlog::info("SIGHUP ignored: livod does not reload its configuration");
-    if (s == SIGUSR1) spdlog::warn("SIGUSR1 ignored: map saving on request is not implemented");
+    if (s == SIGUSR1) publisher.request_map_save();  // written on the IO side, never here
   }
   notifier.stopping(result.stopped_by.empty() ? "the scheduler stopped" : result.stopped_by);
   scheduler_thread.request_stop();

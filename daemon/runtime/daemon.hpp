@@ -5,7 +5,8 @@
 //   capture threads (one per socket; or a pacer thread per pcap) ──rings──▶ scheduler thread
 //   (sources, clock domains, estimator on the worker pool) ──records──▶ publisher thread (LCM,
 //   trajectory, map, timing, log lines); control threads (Livox supervisor, Ouster metadata);
-//   the calling thread handles signals (SIGINT/SIGTERM stop; SIGHUP is ignored: no reload) and
+//   the calling thread handles signals (SIGINT/SIGTERM stop; SIGHUP is ignored: no reload; SIGUSR1
+//   saves the map, on the IO side: runtime/map_save_service.hpp) and
 //   talks to systemd (READY, STATUS, the heartbeat-gated WATCHDOG ping, STOPPING).
 //
 // Stopping (a signal, the options' stop token, or the end of a paced recording): the sources stop
@@ -58,6 +59,9 @@ struct DaemonOptions {
   // Tests: called on the scheduler thread at the top of every loop turn, before its heartbeat
   // (a test blocks in it to stall the scheduler and see the watchdog pings stop). Empty: none.
   std::function<void()> scheduler_turn_hook;
+  // Tests: called on the map writer thread before each map save is written (a test blocks in it
+  // to keep a save in progress and see requests coalesce). Empty: none.
+  std::function<void()> map_save_hook;
 };
 
 struct DaemonResult {

@@ -41,9 +41,17 @@ std::string format_report(const PublisherStats& s, std::uint64_t bus_failures) {
 }  // namespace
 
 Publisher::Publisher(PublisherChannels& channels, MessageBus* bus, PublisherOptions options)
-    : channels_(channels), bus_(bus), options_(std::move(options)), threads_(options_.stuck_after) {
+    : channels_(channels),
+      bus_(bus),
+      options_(std::move(options)),
+      threads_(options_.stuck_after),
+      map_saves_(options_.map_saves, channels_.doorbell) {
   if (!options_.trajectory.empty()) trajectory_.emplace(options_.trajectory);
-  if (!options_.map_pcd.empty()) map_.emplace(options_.map_cell_m, options_.map_max_points);
+  if (!options_.map_pcd.empty() || options_.map_saves.enabled) {
+    map_.emplace(options_.map_cell_m, options_.map_max_points);
+    // Saves read the map while it grows (map_save_service.hpp): its points must never move.
+    if (options_.map_saves.enabled) map_->reserve_budget();
+  }
 }
 
 Publisher::~Publisher() {
@@ -67,7 +75,9 @@ void Publisher::run(const std::stop_token& stop) {
   while (!stop.stop_requested()) {
     heartbeat_.beat();
     const std::uint32_t token = channels_.doorbell.prepare();
-    if (!drain()) channels_.doorbell.wait(token, kIdleWait);
+    const bool any = drain();
+    map_saves_.turn(map(), bus_);
+    if (!any) channels_.doorbell.wait(token, kIdleWait);
   }
 }
 
@@ -229,6 +239,8 @@ std::vector<std::string> Publisher::stop() {
     thread_.join();
   }
   drain();  // what the scheduler published last (it has stopped: this thread owns the channels)
+  map_saves_.finish(map(), bus_);
+  stats_.map_saves = map_saves_.stats();
   if (trajectory_) {
     try {
       trajectory_->close();

@@ -17,11 +17,13 @@
 #include <thread>
 
 #include "core/realtime_offset.hpp"
+#include "daemon/publish/command_records.hpp"
 #include "daemon/replay/map_accumulator.hpp"
 #include "daemon/replay/trajectory_writer.hpp"
 #include "daemon/runtime/heartbeat.hpp"
 #include "daemon/runtime/latency_histogram.hpp"
 #include "daemon/runtime/live_outputs.hpp"
+#include "daemon/runtime/map_save_service.hpp"
 #include "daemon/runtime/records.hpp"
 
 namespace livod::daemon::runtime {
@@ -44,11 +46,18 @@ class MessageBus {
   }
   // Messages that could not be sent.
   [[nodiscard]] virtual std::uint64_t failures() const = 0;
+  // Requests received since the previous call (LCM: livod.command_t), appended to `out`; and
+  // their answers (map_save_service.hpp). Default: a bus without commands.
+  virtual void poll_commands(std::vector<publish::CommandRecord>& /*out*/) {}
+  virtual void publish_command_result(const publish::CommandResultRecord& /*result*/) {}
+  // Messages on the command channel that were not commands (dropped).
+  [[nodiscard]] virtual std::uint64_t malformed_commands() const { return 0; }
 };
 
 struct PublisherOptions {
   std::filesystem::path trajectory;     // TUM, one line per frame; empty: none
   std::filesystem::path map_pcd;        // written at stop; empty: none
+  MapSaveServiceOptions map_saves;      // saves on request while running (map_save_service.hpp)
   std::filesystem::path timing_report;  // written at stop; empty: none
   double map_cell_m = 0.2;
   std::size_t map_max_points = 2'000'000;
@@ -74,6 +83,7 @@ struct PublisherStats {
   LatencyHistogram imu_latency_ms;
   LatencyHistogram frame_ms;
   LatencyHistogram frame_cpu_ms;
+  MapSaveStats map_saves;
 };
 
 class Publisher {
@@ -88,6 +98,8 @@ class Publisher {
   // Threads whose heartbeats health reports (call before start()).
   void watch(std::string name, std::function<std::uint64_t()> beats);
   void start();
+  // Any thread (the main thread on SIGUSR1): save the map now (map_save_service.hpp).
+  void request_map_save() { map_saves_.request_from_signal(); }
   // Drains every channel, writes the map and the timing report, joins. Call once the producer
   // (the scheduler) has stopped. Idempotent. Returns the errors met while writing (empty: none).
   std::vector<std::string> stop();
@@ -96,6 +108,7 @@ class Publisher {
   // After stop().
   [[nodiscard]] const PublisherStats& stats() const { return stats_; }
   [[nodiscard]] std::size_t map_points() const { return map_ ? map_->size() : 0; }
+  [[nodiscard]] const replay::MapAccumulator* map() const { return map_ ? &*map_ : nullptr; }
 
  private:
   void run(const std::stop_token& stop);
@@ -123,7 +136,8 @@ class Publisher {
   RealtimeToMonotonic realtime_;
   std::vector<std::string> errors_;
   bool stopped_ = false;
-  std::jthread thread_;  // last
+  MapSaveService map_saves_;  // after map_: a running save reads it
+  std::jthread thread_;       // last
 };
 
 }  // namespace livod::daemon::runtime
