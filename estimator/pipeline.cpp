@@ -36,6 +36,11 @@ LioPipeline::LioPipeline(PipelineOptions options)
       sync_(SyncParams{options_.max_queued_scans, options_.max_queued_imu}),
       map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
       downsampler_(options_.params.lio.filter_size_surf) {
+  const LioParams& lio = options_.params.lio;
+  if (lio.point_budget > 0 && lio.filter_size_surf > 0.0) {
+    point_budget_.emplace(lio.point_budget, lio.filter_size_surf,
+                          std::max(lio.filter_size_surf, lio.voxel_size));
+  }
   p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.runner,
                                         point_noise(options_.params.lio),
                                         options_.params.lio.incidence_term);
@@ -197,7 +202,19 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   report.timings.undistort_ms = ms_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  downsampler_.apply(undistorted_);
+  if (point_budget_) {
+    downsampler_.set_cell(point_budget_->cell());
+    downsampler_.apply(undistorted_, downsampled_);
+    if (point_budget_->observe(downsampled_.size())) {
+      downsampler_.set_cell(point_budget_->cell());
+      downsampler_.apply(undistorted_, downsampled_);
+      point_budget_->observe(downsampled_.size());
+    }
+    undistorted_.swap(downsampled_);
+  } else {
+    downsampler_.apply(undistorted_);
+  }
+  report.downsample_cell_m = downsampler_.cell();
   spatial_order_.apply(undistorted_, lio.voxel_size);
   report.timings.downsample_ms = ms_since(t0);
   report.used_points = static_cast<int>(undistorted_.size());
