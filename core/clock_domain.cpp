@@ -91,7 +91,12 @@ MappedTime ClockDomain::observe(SensorTime t_sensor, HostTime rx, Nanoseconds ex
   } else if (fine_) {
     mapped = t + fitted_offset_at(t);
   } else {
-    mapped = coarse;
+    // Before the fit: the smallest delay seen so far (a lower bound of the offset, skew taken as
+    // 0). Unlike each sample's own receive stamp it carries no queueing jitter, so consecutive
+    // samples keep their sensor spacing (an IMU's dt is right from the first sample on) and a
+    // scan lines up with the IMU samples around it; it only drifts by the skew (<= 200 ppm) until
+    // the fit takes over.
+    mapped = t + z_lowest_ - floor;
   }
   // Residuals only mean something against a clock model (a coarse one is 0 by construction).
   if (direct_in_sync || fine_) record_residual(coarse - mapped);

@@ -29,8 +29,10 @@
 //                 free-running estimate until the disagreement ends.
 //   free_running  the sensor clock runs on its own oscillator: rx = a * t_sensor + b + delay is
 //                 fitted with the windowed lower convex hull (core/clock_hull.hpp), |a - 1| <=
-//                 max_skew_ppm. Until the window holds min_fine_span of data the mapping is the
-//                 coarse rx - expected_tx_latency - min_transport_delay.
+//                 max_skew_ppm. Until the window holds min_fine_span of data the mapping is
+//                 coarse: t_sensor plus the smallest rx - expected_tx_latency - t_sensor seen so
+//                 far, minus min_transport_delay (skew taken as 0; no queueing jitter, so sample
+//                 spacings stay those of the sensor clock).
 //   receive_time  no sensor clock: mapped = rx - receive_latency - expected_tx_latency. t_sensor is
 //                 ignored by observe(); map(t) treats t as a host receive stamp.
 //

@@ -97,8 +97,14 @@ PipelineCounters LioPipeline::counters() const {
   return c;
 }
 
-void LioPipeline::process(const std::function<void(const PipelineOutput&)>& on_output) {
-  while (sync_.next(group_)) process_group(group_, on_output);
+std::size_t LioPipeline::process(const std::function<void(const PipelineOutput&)>& on_output,
+                                 std::size_t max_groups) {
+  std::size_t done = 0;
+  while (done < max_groups && sync_.next(group_)) {
+    process_group(group_, on_output);
+    ++done;
+  }
+  return done;
 }
 
 void LioPipeline::propagate_to(const MeasurementGroup& group, ImuPoseTrack& track) {
@@ -292,7 +298,14 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   report.timings.total_ms = ms_since(t_total);
   ++counters_.scans_processed;
 
-  if (on_output) on_output(PipelineOutput{group.t_update, belief_.x, belief_.P, report});
+  if (on_output) {
+    PipelineOutput out{group.t_update, belief_.x, belief_.P, report};
+    out.registered_world = world_points_;
+    out.T_world_lidar.linear() = R_wl;
+    out.T_world_lidar.translation() =
+        R * options_.T_imu_lidar.translation() + belief_.x.p_world_imu;
+    on_output(out);
+  }
 }
 
 }  // namespace livod::estimator

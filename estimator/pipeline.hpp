@@ -9,9 +9,11 @@
 // time can become the update time later (scan recombination) without changing the filter.
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "core/measurement.hpp"
@@ -72,6 +74,12 @@ struct PipelineOutput {
   State x;
   StateMatrix P;
   FrameReport report;
+  // The frame's points as the update used them (undistorted to t, downsampled), registered in the
+  // world frame with their world covariances (pose uncertainty included). Valid during the
+  // output callback only.
+  std::span<const CovPoint> registered_world;
+  // The LiDAR's pose at t: T_world_imu * T_imu_lidar.
+  Eigen::Isometry3d T_world_lidar = Eigen::Isometry3d::Identity();
 };
 
 struct PipelineCounters {
@@ -95,8 +103,13 @@ class LioPipeline {
   void add_imu(const ImuSample& sample);
   // Taken by value (it is queued): move a scan in when the caller is done with it.
   void add_scan(LidarScan scan);
-  // Runs every group whose scan end is covered by IMU data.
-  void process(const std::function<void(const PipelineOutput&)>& on_output);
+  // Runs the groups whose scan end is covered by IMU data, at most `max_groups` of them (the
+  // daemon runs one at a time so that it can drain its rings in between); returns how many ran.
+  std::size_t process(const std::function<void(const PipelineOutput&)>& on_output,
+                      std::size_t max_groups = SIZE_MAX);
+  // Scans queued for the estimator (waiting for IMU data or for their turn).
+  [[nodiscard]] std::size_t queued_scans() const { return sync_.queued_scans(); }
+  [[nodiscard]] std::size_t queued_imu() const { return sync_.queued_imu(); }
 
   [[nodiscard]] bool initialised() const { return initializer_.done(); }
   [[nodiscard]] const std::string& init_status() const { return initializer_.status(); }

@@ -303,6 +303,20 @@ struct CandumpReader::Impl {
   std::uint64_t line_number = 0;
   CandumpStats stats;
   std::string first_skipped_error;
+  // Lenient mode: consecutive skipped lines form one loss, closed by the next frame (which gives
+  // the time it spans) or by the end of the file.
+  InputLossLog losses;
+  std::optional<InputLoss> open_loss;
+  std::optional<std::int64_t> last_time_ns;
+
+  void close_loss(std::optional<std::int64_t> resume_ns) {
+    if (!open_loss) return;
+    if (resume_ns && last_time_ns && *resume_ns >= *last_time_ns) {
+      open_loss->seconds = static_cast<double>(*resume_ns - *last_time_ns) * 1e-9;
+    }
+    losses.add(std::move(*open_loss));
+    open_loss.reset();
+  }
 };
 
 CandumpReader::CandumpReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -334,7 +348,10 @@ bool CandumpReader::next(CanFrame& frame) {
   while (true) {
     in.getline(s.buffer.data(), static_cast<std::streamsize>(s.buffer.size()));
     const auto extracted = static_cast<std::uint64_t>(in.gcount());
-    if (extracted == 0 && in.eof()) return false;
+    if (extracted == 0 && in.eof()) {
+      s.close_loss(std::nullopt);
+      return false;
+    }
     const std::uint64_t line_offset = s.offset;
     ++s.line_number;
     ++s.stats.lines;
@@ -354,6 +371,8 @@ bool CandumpReader::next(CanFrame& frame) {
       error = parse_candump_line(line, frame);
       if (!error) {
         ++s.stats.frames;
+        s.close_loss(frame.time_ns);
+        s.last_time_ns = frame.time_ns;
         return true;
       }
     }
@@ -363,6 +382,15 @@ bool CandumpReader::next(CanFrame& frame) {
     if (!s.options.lenient) throw format_error;
     ++s.stats.skipped;
     if (s.first_skipped_error.empty()) s.first_skipped_error = format_error.what();
+    if (!s.open_loss) {
+      s.open_loss.emplace();
+      s.open_loss->file = s.source;
+      s.open_loss->byte_offset = line_offset;
+      s.open_loss->unit = "lines";
+      s.open_loss->reason = message;
+    }
+    s.open_loss->bytes = s.offset - s.open_loss->byte_offset.value_or(line_offset);
+    ++s.open_loss->records;
   }
 }
 
@@ -372,6 +400,10 @@ const CandumpStats& CandumpReader::stats() const {
 
 const std::string& CandumpReader::first_skipped_error() const {
   return impl_->first_skipped_error;
+}
+
+const InputLossLog& CandumpReader::losses() const {
+  return impl_->losses;
 }
 
 // ------------------------------------------------------------------------------------------------

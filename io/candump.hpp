@@ -24,6 +24,8 @@
 #include <string>
 #include <string_view>
 
+#include "io/input_loss.hpp"
+
 namespace livod::io {
 
 struct CanFrame {
@@ -92,6 +94,9 @@ class CandumpReader {
   [[nodiscard]] const CandumpStats& stats() const;
   // The first skipped line's error in lenient mode (same text FormatError would carry), or empty.
   [[nodiscard]] const std::string& first_skipped_error() const;
+  // Lenient mode: the skipped lines, consecutive ones as one loss (byte offset, bytes, lines, and
+  // the log time between the frames around them). Complete once next() has returned false.
+  [[nodiscard]] const InputLossLog& losses() const;
 
  private:
   struct Impl;

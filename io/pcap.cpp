@@ -1,12 +1,17 @@
 #include "io/pcap.hpp"
 
+#include <fcntl.h>
 #include <pcap/pcap.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -38,6 +43,13 @@ constexpr std::size_t kMinIpv4Mtu = 68;        // RFC 791: every host must accep
 constexpr std::size_t kMaxIpv4Mtu = 65535;
 constexpr int kWriterSnaplen = 262144;  // libpcap's MAXIMUM_SNAPLEN
 constexpr std::int64_t kNsPerSecond = 1'000'000'000;
+// Resynchronisation after a damaged record (see RecordScanner).
+constexpr std::uint32_t kMaxRecordBytes = 262144;        // libpcap's largest snapshot length
+constexpr std::int64_t kMaxResyncTimeJumpS = 24 * 3600;  // a candidate record's time vs the last
+constexpr int kResyncChain = 3;  // records that must follow a candidate (or the end of the file)
+constexpr std::uint32_t kPcapngShb = 0x0A0D0D0A;
+constexpr std::uint32_t kPcapngByteOrder = 0x1A2B3C4D;
+constexpr std::uint32_t kPcapngEpb = 6;
 
 std::uint16_t be16(std::span<const std::byte> b, std::size_t at) {
   return static_cast<std::uint16_t>((std::to_integer<unsigned>(b[at]) << 8) |
@@ -157,6 +169,191 @@ bool record_time_ns(const pcap_pkthdr& header, std::int64_t& out) {
   return !__builtin_add_overflow(seconds_ns, static_cast<std::int64_t>(header.ts.tv_usec), &out);
 }
 
+// Random access to the raw bytes of the capture, beside libpcap's own stream.
+class RawBytes {
+ public:
+  RawBytes() = default;
+  RawBytes(const RawBytes&) = delete;
+  RawBytes& operator=(const RawBytes&) = delete;
+  ~RawBytes() { close_fd(); }
+
+  void open_file(const std::filesystem::path& path) {
+    close_fd();
+    memory_ = {};
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    size_ = 0;
+    if (fd_ >= 0) {
+      const off_t end = ::lseek(fd_, 0, SEEK_END);
+      size_ = end > 0 ? static_cast<std::uint64_t>(end) : 0;
+    }
+  }
+  void use_memory(std::span<const std::byte> bytes) {
+    close_fd();
+    memory_ = bytes;
+    size_ = bytes.size();
+  }
+  [[nodiscard]] std::uint64_t size() const { return size_; }
+  // Reads n bytes at `offset`; false when they are not all there.
+  bool read(std::uint64_t offset, std::byte* out, std::size_t n) const {
+    if (offset > size_ || n > size_ - offset) return false;
+    if (fd_ < 0) {
+      if (n > 0) std::memcpy(out, memory_.data() + offset, n);
+      return true;
+    }
+    std::size_t done = 0;
+    while (done < n) {
+      const ssize_t got = ::pread(fd_, out + done, n - done, static_cast<off_t>(offset + done));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) return false;
+      done += static_cast<std::size_t>(got);
+    }
+    return true;
+  }
+
+ private:
+  void close_fd() {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+  }
+  int fd_ = -1;
+  std::span<const std::byte> memory_;
+  std::uint64_t size_ = 0;
+};
+
+// Finds where the records of a damaged capture resume. libpcap cannot resynchronise after a
+// corrupt record header, so on an error the reader asks the scanner for the next offset at which
+// a plausible record starts that is followed by kResyncChain more plausible records (or the end
+// of the file), and continues there. Classic pcap: a record header whose capture length fits the
+// file and libpcap's limit, is at most the original length, has a sub-second part below one
+// second and a time within a day of the last good record. pcapng: a block of a known type whose
+// total length is a multiple of 4 and repeated at its end (blocks are 4-byte aligned).
+class RecordScanner {
+ public:
+  // Learns the format from the file header; false if it is neither pcap nor pcapng.
+  bool init(const RawBytes& raw) {
+    std::array<std::byte, 24> h{};
+    if (!raw.read(0, h.data(), h.size())) return false;
+    const std::uint32_t magic_le = le32(h, 0);
+    const std::uint32_t magic_be = be32(h, 0);
+    ng_ = magic_le == kPcapngShb;
+    if (ng_) {
+      big_endian_ = be32(h, 8) == kPcapngByteOrder;
+      return big_endian_ || le32(h, 8) == kPcapngByteOrder;
+    }
+    for (const bool big : {false, true}) {
+      const std::uint32_t m = big ? magic_be : magic_le;
+      if (m == 0xA1B2C3D4 || m == 0xA1B23C4D || m == 0xA1B2CD34) {
+        big_endian_ = big;
+        fraction_limit_ = m == 0xA1B23C4D ? 1'000'000'000U : 1'000'000U;
+        header_bytes_ = m == 0xA1B2CD34 ? 24 : 16;  // Kuznetzov's modified format adds 8 bytes
+        return true;
+      }
+    }
+    return false;
+  }
+
+  [[nodiscard]] bool pcapng() const { return ng_; }
+
+  // The first offset >= `from` where records resume, or nullopt when none does before the end.
+  std::optional<std::uint64_t> resume_after(const RawBytes& raw, std::uint64_t from,
+                                            std::optional<std::int64_t> last_seconds) const {
+    std::uint64_t pos = from;
+    if (ng_ && pos % 4 != 0) pos += 4 - pos % 4;
+    const std::uint64_t step = ng_ ? 4 : 1;
+    // Scan a window at a time rather than byte by byte through pread.
+    constexpr std::size_t kWindow = 1 << 16;
+    std::vector<std::byte> window;
+    while (pos + minimum_record() <= raw.size()) {
+      const std::size_t n =
+          static_cast<std::size_t>(std::min<std::uint64_t>(kWindow, raw.size() - pos));
+      window.resize(n);
+      if (!raw.read(pos, window.data(), n)) return std::nullopt;
+      for (std::size_t i = 0; i + minimum_record() <= n; i += step) {
+        if (!quick_check(std::span<const std::byte>(window).subspan(i), pos + i, raw.size(),
+                         last_seconds)) {
+          continue;
+        }
+        if (chain_ok(raw, pos + i, last_seconds)) return pos + i;
+      }
+      if (n <= minimum_record()) break;
+      pos += n - minimum_record() + step;
+      if (ng_ && pos % 4 != 0) pos += 4 - pos % 4;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  [[nodiscard]] std::size_t minimum_record() const { return ng_ ? 12 : header_bytes_; }
+
+  [[nodiscard]] std::uint32_t u32(std::span<const std::byte> b, std::size_t at) const {
+    return big_endian_ ? be32(b, at) : le32(b, at);
+  }
+
+  // Checks what the record header alone can tell; on success `next` is the following record.
+  bool record_ok(std::span<const std::byte> b, std::uint64_t at, std::uint64_t file_size,
+                 std::optional<std::int64_t> last_seconds, std::uint64_t& next) const {
+    if (ng_) {
+      const std::uint32_t type = u32(b, 0);
+      const std::uint32_t length = u32(b, 4);
+      const bool known =
+          type == kPcapngShb || (type >= 1 && type <= 10) || type == 0xBAD || type == 0x40000BAD;
+      if (!known || length < 12 || length % 4 != 0 || length > file_size - at) return false;
+      if (type == kPcapngEpb && length < 32) return false;
+      next = at + length;
+      return true;
+    }
+    const std::uint32_t seconds = u32(b, 0);
+    const std::uint32_t fraction = u32(b, 4);
+    const std::uint32_t caplen = u32(b, 8);
+    const std::uint32_t len = u32(b, 12);
+    if (caplen > kMaxRecordBytes || len > kMaxRecordBytes || caplen > len || caplen == 0 ||
+        fraction >= fraction_limit_) {
+      return false;
+    }
+    if (last_seconds &&
+        std::llabs(static_cast<std::int64_t>(seconds) - *last_seconds) > kMaxResyncTimeJumpS) {
+      return false;
+    }
+    if (header_bytes_ + std::uint64_t{caplen} > file_size - at) return false;
+    next = at + header_bytes_ + caplen;
+    return true;
+  }
+
+  bool quick_check(std::span<const std::byte> b, std::uint64_t at, std::uint64_t file_size,
+                   std::optional<std::int64_t> last_seconds) const {
+    std::uint64_t next = 0;
+    return record_ok(b, at, file_size, last_seconds, next);
+  }
+
+  // The record at `at` and the kResyncChain records after it are plausible (pcapng: their
+  // trailing lengths match), or the file ends cleanly after one of them.
+  bool chain_ok(const RawBytes& raw, std::uint64_t at,
+                std::optional<std::int64_t> last_seconds) const {
+    std::array<std::byte, 24> h{};
+    std::uint64_t pos = at;
+    for (int k = 0; k <= kResyncChain; ++k) {
+      if (pos == raw.size()) return k > 0;
+      const std::size_t n = minimum_record();
+      if (!raw.read(pos, h.data(), n)) return false;
+      std::uint64_t next = 0;
+      if (!record_ok(std::span<const std::byte>(h).first(n), pos, raw.size(), last_seconds, next)) {
+        return false;
+      }
+      if (ng_) {
+        std::array<std::byte, 4> trailer{};
+        if (!raw.read(next - 4, trailer.data(), 4) || u32(trailer, 0) != u32(h, 4)) return false;
+      }
+      pos = next;
+    }
+    return true;
+  }
+
+  bool ng_ = false;
+  bool big_endian_ = false;
+  std::uint32_t fraction_limit_ = 1'000'000U;
+  std::size_t header_bytes_ = 16;
+};
+
 struct PcapCloser {
   void operator()(pcap_t* p) const { pcap_close(p); }
 };
@@ -189,6 +386,17 @@ struct PcapReader::Impl {
   bool finished = false;
   std::uint64_t next_record_index = 0;
   bool have_record_time = false;  // min/max_record_time_ns are set
+  // Reading past damage.
+  RawBytes raw;
+  RecordScanner scanner;
+  bool scanner_ok = false;
+  std::uint64_t first_record_pos = 0;  // after the file header (pcapng: after the first blocks)
+  std::optional<std::int64_t> last_good_ns;  // time of the last record read
+  bool loss_open = false;  // the last loss waits for the time of the next good record
+  InputLossLog losses;
+
+  // Handles a record libpcap could not read at `record_start`; false when the file ends there.
+  bool skip_damage(std::uint64_t record_start, const std::string& message);
 
   void open();
   void sync_incomplete();
@@ -221,6 +429,16 @@ void PcapReader::Impl::open() {
                       "not a readable pcap/pcapng capture: " + message);
   }
   pcap.reset(p);
+  if (in_memory) {
+    raw.use_memory(memory);
+  } else {
+    raw.open_file(path);
+  }
+  scanner_ok = scanner.init(raw);
+  {
+    const long position = std::ftell(pcap_file(p));
+    first_record_pos = position < 0 ? 0 : static_cast<std::uint64_t>(position);
+  }
   dlt = pcap_datalink(p);
   // libpcap reports the pcapng section header version (1.0) as the file version; classic pcap is
   // 2.4.
@@ -239,6 +457,37 @@ void PcapReader::Impl::finish() {
   reassembler.flush();
   sync_incomplete();
   finished = true;
+}
+
+bool PcapReader::Impl::skip_damage(std::uint64_t record_start, const std::string& message) {
+  InputLoss loss;
+  loss.file = source;
+  loss.byte_offset = record_start;
+  loss.reason = message;
+  std::optional<std::uint64_t> resume;
+  if (scanner_ok) {
+    std::optional<std::int64_t> last_seconds;
+    if (last_good_ns) last_seconds = *last_good_ns / kNsPerSecond;
+    resume = scanner.resume_after(raw, record_start + 1, last_seconds);
+  }
+  const std::uint64_t end = resume ? *resume : std::max(raw.size(), record_start);
+  loss.bytes = end - record_start;
+  // The records in the stretch are not known; estimate them from the average record size.
+  if (stats.records > 0 && record_start > first_record_pos && loss.bytes > 0) {
+    const double average =
+        static_cast<double>(record_start - first_record_pos) / static_cast<double>(stats.records);
+    loss.records = std::max<std::uint64_t>(
+        1, static_cast<std::uint64_t>(static_cast<double>(loss.bytes) / average + 0.5));
+    loss.records_estimated = true;
+  } else {
+    loss.records = 1;
+    loss.records_estimated = true;
+  }
+  if (!resume) loss.reason += " (the file ends in the damage)";
+  losses.add(std::move(loss));
+  loss_open = resume.has_value();
+  if (!resume) return false;
+  return std::fseek(pcap_file(pcap.get()), static_cast<long>(*resume), SEEK_SET) == 0;
 }
 
 std::optional<UdpDatagram> PcapReader::Impl::decode(std::span<const std::byte> frame,
@@ -377,19 +626,24 @@ std::optional<UdpDatagram> PcapReader::next() {
   while (!s.finished) {
     pcap_pkthdr* header = nullptr;
     const u_char* data = nullptr;
+    const long start = std::ftell(pcap_file(s.pcap.get()));
+    const std::uint64_t record_start = start < 0 ? 0 : static_cast<std::uint64_t>(start);
     const int rc = pcap_next_ex(s.pcap.get(), &header, &data);
     if (rc == PCAP_ERROR_BREAK) {  // clean end of file
       s.finish();
       break;
     }
     if (rc != 1) {
-      // A truncated or corrupt record: libpcap cannot resynchronise, so the file ends here.
+      // A truncated or corrupt record: libpcap cannot resynchronise, so the scanner finds where
+      // the records resume and the reader continues there; the stretch is an InputLoss.
       ++s.stats.malformed;
-      const long position = std::ftell(pcap_file(s.pcap.get()));
-      s.end_error = "at byte offset " + std::to_string(position < 0 ? 0 : position) + ": " +
-                    pcap_geterr(s.pcap.get());
-      s.finish();
-      break;
+      const std::string message = pcap_geterr(s.pcap.get());
+      if (!s.skip_damage(record_start, message)) {
+        s.end_error = "at byte offset " + std::to_string(record_start) + ": " + message;
+        s.finish();
+        break;
+      }
+      continue;
     }
     const std::uint64_t index = s.next_record_index++;
     std::int64_t time_ns = 0;
@@ -398,6 +652,13 @@ std::optional<UdpDatagram> PcapReader::next() {
       ++s.stats.malformed;
       continue;
     }
+    if (s.loss_open) {
+      s.loss_open = false;
+      if (s.last_good_ns && time_ns >= *s.last_good_ns) {
+        s.losses.set_last_seconds(static_cast<double>(time_ns - *s.last_good_ns) / 1e9);
+      }
+    }
+    s.last_good_ns = time_ns;
     if (!s.have_record_time) {
       s.have_record_time = true;
       s.stats.min_record_time_ns = time_ns;
@@ -419,6 +680,9 @@ void PcapReader::rewind() {
   impl_->reassembler.flush();
   impl_->sync_incomplete();
   impl_->end_error.clear();
+  impl_->losses = InputLossLog{};
+  impl_->loss_open = false;
+  impl_->last_good_ns.reset();
   impl_->pcap.reset();
   impl_->open();
 }
@@ -453,6 +717,10 @@ bool PcapReader::is_pcapng() const {
 
 const std::string& PcapReader::end_error() const {
   return impl_->end_error;
+}
+
+const InputLossLog& PcapReader::losses() const {
+  return impl_->losses;
 }
 
 // ------------------------------------------------------------------------------------------------

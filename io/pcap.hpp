@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "io/input_loss.hpp"
 #include "io/ipv4_reassembly.hpp"
 
 namespace livod::io {
@@ -68,9 +69,12 @@ class PcapReader {
   // Only datagrams whose destination port is in `ports` are returned (empty = all).
   void set_port_filter(std::vector<std::uint16_t> ports);
 
-  // The next complete UDP datagram, or nullopt at the end of the file. A truncated final record
-  // ends the file and is counted as malformed (it does not throw); a corrupt file header throws
-  // livod::FormatError with the byte offset.
+  // The next complete UDP datagram, or nullopt at the end of the file. A corrupt record (a
+  // capture length libpcap refuses, a broken pcapng block) does not end the file: the reader
+  // scans for the next offset where valid records resume, continues there and records the
+  // skipped stretch in losses(); a truncated final record ends the file. Each damaged stretch
+  // counts once as malformed. A corrupt file header throws livod::FormatError with the byte
+  // offset.
   std::optional<UdpDatagram> next();
 
   // Back to the first record (stats are kept).
@@ -86,8 +90,12 @@ class PcapReader {
   [[nodiscard]] std::string link_type_name() const;  // e.g. "EN10MB", "LINUX_SLL2"
   [[nodiscard]] bool is_pcapng() const;
   // Why reading stopped before a clean end of file (libpcap's message and the byte offset), or
-  // empty. Set together with the malformed count for a truncated or corrupt record.
+  // empty: the file ended inside damage (a truncated or corrupt final record).
   [[nodiscard]] const std::string& end_error() const;
+  // Every stretch of the file that could not be read (byte offset, bytes, estimated records,
+  // the recording time it spans), including the one end_error() describes. Empty for an intact
+  // capture.
+  [[nodiscard]] const InputLossLog& losses() const;
 
  private:
   struct Impl;

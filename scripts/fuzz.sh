@@ -7,15 +7,17 @@
 # target keeps its corpus in <build>/corpus/<target>, seeded from fuzz/seeds/<target>/ and, where
 # fuzz/seeds/<target>.shared lists them, from files of the shared test data (copied at run time,
 # never into the repository). A fuzz/<target>.dict is passed as the dictionary. Crash inputs land
-# in <build>/artifacts/<target>/. Exits non-zero if any target finds a crash, leak or timeout.
+# in <build>/artifacts/<target>/. Exits non-zero if any target finds a crash, leak or timeout
+# (a unit running longer than FUZZ_TIMEOUT s), or a slow unit (longer than FUZZ_SLOW_UNIT_S s:
+# a hostile input that stalls a parser is a defect even when it ends).
 #
 # Environment: FUZZ_BUILD_DIR (default build/fuzz), FUZZ_JOBS (build jobs, default nproc),
-# LIVOD_DATA_DIR (default ../shared/data).
+# LIVOD_DATA_DIR (default ../shared/data), FUZZ_TIMEOUT (default 10), FUZZ_SLOW_UNIT_S (default 1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 usage() {
-  sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
 }
 
@@ -30,6 +32,8 @@ fi
 build_dir=${FUZZ_BUILD_DIR:-build/fuzz}
 jobs=${FUZZ_JOBS:-$(nproc)}
 data_dir=${LIVOD_DATA_DIR:-../shared/data}
+timeout_s=${FUZZ_TIMEOUT:-10}
+slow_unit_s=${FUZZ_SLOW_UNIT_S:-1}
 
 targets=("$@")
 if ((${#targets[@]} == 0)); then
@@ -67,15 +71,22 @@ for t in "${targets[@]}"; do
       fi
     done <"fuzz/seeds/$t.shared"
   fi
-  args=(-max_total_time="$seconds" -timeout=25 -print_final_stats=1
-    -artifact_prefix="$artifacts/")
+  args=(-max_total_time="$seconds" -timeout="$timeout_s" -report_slow_units="$slow_unit_s"
+    -print_final_stats=1 -artifact_prefix="$artifacts/")
   if [[ -f fuzz/$t.dict ]]; then
     args+=(-dict="fuzz/$t.dict")
   fi
   log="$build_dir/$t.log"
   echo "== $t: ${seconds} s, corpus $corpus ($(find "$corpus" -type f | wc -l) files)"
   status=0
+  slow_before=$(find "$artifacts" -name 'slow-unit-*' | wc -l)
   "$build_dir/fuzz/$t" "${args[@]}" "$corpus" >"$log" 2>&1 || status=$?
+  # libFuzzer only reports slow units (it writes them as slow-unit-* artifacts): fail on them.
+  slow_after=$(find "$artifacts" -name 'slow-unit-*' | wc -l)
+  if ((status == 0 && slow_after > slow_before)); then
+    status=3
+    echo "fuzz.sh: $t: a unit ran longer than ${slow_unit_s} s (see $artifacts/slow-unit-*)" >&2
+  fi
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
   cov=$(grep -oE 'cov: [0-9]+' "$log" | tail -1 | cut -d' ' -f2)
@@ -86,7 +97,7 @@ for t in "${targets[@]}"; do
   if ((status != 0)); then
     failed+=("$t")
     echo "fuzz.sh: $t failed (exit $status); log: $log; artifacts: $artifacts" >&2
-    grep -E 'ERROR|SUMMARY|Test unit written' "$log" >&2 || tail -20 "$log" >&2
+    grep -E 'ERROR|SUMMARY|Test unit written|Slowest unit|slow-unit' "$log" >&2 || tail -20 "$log" >&2
   fi
 done
 

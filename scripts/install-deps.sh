@@ -20,8 +20,8 @@ packages=(
   libsystemd-dev
   # bag chunk compression, hashing in tests
   libbz2-dev liblz4-dev libssl-dev zlib1g-dev
-  # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev libreaderwriterqueue-dev
+  # tests and benchmarks (python3: the generated LCM Python types are tested with it)
+  libgtest-dev libgmock-dev libbenchmark-dev libreaderwriterqueue-dev python3
 )
 
 missing=()

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -374,18 +376,32 @@ TEST(ClockDomain, CoarseUntilTheWindowSpansEnoughThenFine) {
   ClockDomain clock(c);
   const RunResult r = run(clock, s, 0.0);
   const double rate = s.rate_hz;
+  std::int64_t lowest = std::numeric_limits<std::int64_t>::max();
+  std::vector<double> coarse_spacing_error;
+  std::vector<double> receive_spacing_error;
   for (std::size_t k = 0; k < r.packets.size(); ++k) {
     const double t_s = static_cast<double>(k) / rate;
     const Packet& p = r.packets[k];
+    lowest = std::min(lowest, p.rx - s.tx_latency_ns - p.t);
     if (t_s < 1.9) {
       ASSERT_EQ(r.quality[k], SyncQuality::coarse) << k;
-      // Coarse mapping is exactly the receive stamp minus the known latencies.
-      ASSERT_EQ(r.mapped[k], p.rx - s.tx_latency_ns - c.min_transport_delay.count()) << k;
+      // Coarse mapping: the sensor stamp plus the smallest delay seen so far, minus the floor.
+      ASSERT_EQ(r.mapped[k], p.t + lowest - c.min_transport_delay.count()) << k;
+      if (k > 0) {
+        // Sample spacing: the coarse mapping keeps the sensor's (up to its skew); the receive
+        // stamps carry the queueing jitter.
+        const Packet& q = r.packets[k - 1];
+        const double true_dt = static_cast<double>(p.h - q.h);
+        coarse_spacing_error.push_back(
+            std::abs(static_cast<double>(r.mapped[k] - r.mapped[k - 1]) - true_dt));
+        receive_spacing_error.push_back(std::abs(static_cast<double>(p.rx - q.rx) - true_dt));
+      }
     }
     if (t_s > 2.6) {
       ASSERT_EQ(r.quality[k], SyncQuality::fine) << k;
     }
   }
+  EXPECT_LT(summarise(coarse_spacing_error).p99_ns, 0.1 * summarise(receive_spacing_error).p99_ns);
   // The first fine samples are already far better than the coarse ones.
   std::vector<double> early_fine;
   for (std::size_t k = 0; k < r.packets.size(); ++k) {

@@ -1,6 +1,8 @@
-// `livod check-config FILE`: loads the configuration exactly as `livod run` would, prints every
-// problem (one per line, compiler style, so editors can jump to them) and, when there is no
-// error, a short summary of the sensors and outputs. Nothing is opened: no socket, no device.
+// `livod check-config FILE`: loads the configuration exactly as the run would, reads the files it
+// names as the run reads them (Ouster metadata, Velodyne calibration, the recordings a replay
+// would open: daemon/preflight.hpp), prints every problem (one per line, compiler style, so
+// editors can jump to them) and, when there is no error, a short summary of the sensors and
+// outputs. No socket and no device is opened.
 
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
@@ -11,6 +13,7 @@
 #include "daemon/commands/command.hpp"
 #include "daemon/config/load_config.hpp"
 #include "daemon/config/summary.hpp"
+#include "daemon/preflight.hpp"
 
 namespace livod::daemon {
 
@@ -25,7 +28,12 @@ void add_check_config_command(CLI::App& app, CommandContext& ctx) {
   cmd->add_option("FILE", options->file, "The YAML configuration file")->required();
   cmd->add_flag("--strict", options->strict, "Treat warnings as errors (exit status 1)");
   cmd->callback([&ctx, options] {
-    const ConfigResult result = load_config(options->file);
+    ConfigResult result = load_config(options->file);
+    if (result.ok()) {
+      for (auto& p : check_config_files(result.config, /*open_recordings=*/true)) {
+        result.problems.push_back(std::move(p));
+      }
+    }
     for (const auto& problem : result.problems) {
       fmt::print(stderr, "{}\n", format_problem(result.source, problem));
     }

@@ -15,6 +15,7 @@ struct CommandContext {
 
 void add_version_command(CLI::App& app, CommandContext& ctx);
 // COMMAND-DECLARATIONS (one line per subcommand; keep sorted)
+void add_run_command(CLI::App& app, CommandContext& ctx);
 void add_replay_command(CLI::App& app, CommandContext& ctx);
 void add_decode_command(CLI::App& app, CommandContext& ctx);
 void add_inspect_command(CLI::App& app, CommandContext& ctx);

@@ -1,8 +1,12 @@
 // `livod decode CAPTURE.pcap --model MODEL [--calibration FILE] [--metadata FILE.json]
 //  [--port N...] -o OUT.csv|OUT.pcd [--pcd-ascii]`: decodes a LiDAR capture with the driver the
-// model names (drivers/registry) and writes every scan (drivers/scan_writer). Prints packet,
-// scan, point, drop, gap and error counts. Exit codes: 0 done, 1 an unreadable capture or
-// calibration, 2 a usage error (unknown model, unsupported output extension).
+// model names (drivers/registry; Ouster product names such as OS1-128 or OS-1-128 are accepted
+// and cross-checked with the metadata) and writes every scan (drivers/scan_writer). Prints
+// packet, scan, point, drop, gap and error counts, and every stretch of the capture that could
+// not be read. Exit codes: 0 done, 1 an unreadable capture or calibration, or a decode that gave
+// no point or more decode errors than packets (a wrong model, port or metadata), 2 a usage error
+// (unknown model, unsupported output extension), 3 part of the capture could not be read (the
+// output covers the rest) and --accept-partial-input was not given.
 //
 // --config is not offered yet: the YAML configuration loader (daemon/config) is being written;
 // the decoder options it will carry (cut angle, range limits) have defaults meanwhile.
@@ -10,9 +14,11 @@
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <exception>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -21,9 +27,13 @@
 #include "daemon/commands/command.hpp"
 #include "daemon/config/load_config.hpp"
 #include "daemon/config/problems.hpp"
+#include "daemon/config/sensor_models.hpp"
+#include "daemon/replay/decoder_factory.hpp"
+#include "drivers/ouster/metadata.hpp"
 #include "drivers/registry.hpp"
 #include "drivers/scan_writer.hpp"
 #include "drivers/velodyne/velodyne_decoder.hpp"
+#include "io/input_loss.hpp"
 #include "io/pcap.hpp"
 
 namespace livod::daemon {
@@ -31,6 +41,8 @@ namespace {
 
 constexpr int kExitFailure = 1;
 constexpr int kExitUsage = 2;
+constexpr int kExitPartialInput = 3;
+constexpr std::size_t kPortsShown = 8;
 
 struct DecodeArgs {
   std::string capture;
@@ -40,6 +52,7 @@ struct DecodeArgs {
   std::vector<std::uint16_t> ports;
   std::string output;
   bool pcd_ascii = false;
+  bool accept_partial_input = false;
   std::string config;  // optional livod configuration: supplies calibration / metadata files
 };
 
@@ -76,17 +89,40 @@ void print_family_details(const drivers::LidarDecoder& decoder) {
   }
 }
 
+// Datagrams per destination port of the whole capture, most frequent first ("2368 x1000, ...").
+std::string ports_in_capture(const std::string& capture) {
+  io::PcapReader reader(capture);
+  std::map<std::uint16_t, std::uint64_t> counts;
+  while (const auto d = reader.next()) ++counts[d->dst_port];
+  std::vector<std::pair<std::uint16_t, std::uint64_t>> sorted(counts.begin(), counts.end());
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::string out;
+  for (std::size_t i = 0; i < sorted.size() && i < kPortsShown; ++i) {
+    out += fmt::format("{}{} x{}", out.empty() ? "" : ", ", sorted[i].first, sorted[i].second);
+  }
+  return out.empty() ? "none" : out;
+}
+
+// An Ouster product name (OS1-128, OS-0-64, ...) for the registry's "OS" entry, or nullopt.
+std::optional<std::string> ouster_product(const std::string& model) {
+  if (drivers::find_decoder(model) != nullptr) return std::nullopt;
+  return canonical_model(Driver::ouster, model);
+}
+
 int run_decode(const DecodeArgs& args) {
   drivers::DecoderConfig config;
   config.model = args.model;
   if (!args.calibration.empty()) config.calibration = args.calibration;
   if (!args.metadata.empty()) config.metadata = args.metadata;
-  if (drivers::find_decoder(args.model) == nullptr) {
+  const std::optional<std::string> ouster_model = ouster_product(args.model);
+  if (ouster_model) config.model = "OS";
+  if (drivers::find_decoder(config.model) == nullptr) {
     fmt::print(stderr, "livod decode: unknown model '{}'; known models: {}\n", args.model,
                drivers::known_models());
     return kExitUsage;
   }
-  if (!args.config.empty() && !apply_config(args.config, args.model, config)) {
+  if (!args.config.empty() && !apply_config(args.config, config.model, config)) {
     return kExitFailure;
   }
   const auto format = drivers::scan_format_for(args.output, args.pcd_ascii);
@@ -96,6 +132,17 @@ int run_decode(const DecodeArgs& args) {
   }
 
   try {
+    if (ouster_model && config.metadata) {
+      SensorConfig sensor;
+      sensor.model = *ouster_model;
+      const std::string mismatch =
+          replay::ouster_model_mismatch(sensor, drivers::ouster::load_metadata(*config.metadata));
+      if (!mismatch.empty()) {
+        fmt::print(stderr, "livod decode: {}: {}\n", config.metadata->string(),
+                   "--model " + args.model + ": " + mismatch);
+        return kExitFailure;
+      }
+    }
     const std::unique_ptr<drivers::LidarDecoder> decoder = drivers::make_decoder(config);
     io::PcapReader reader(args.capture);
     const std::vector<std::uint16_t> ports =
@@ -133,7 +180,40 @@ int run_decode(const DecodeArgs& args) {
         p.non_udp, p.malformed, p.filtered, p.incomplete_fragments, c.sequence_gaps,
         c.decode_errors);
     print_family_details(*decoder);
-    return 0;
+
+    int status = 0;
+    const std::uint64_t points = writer.points_written();
+    if (points == 0 || c.decode_errors > c.lidar_packets) {
+      fmt::print(stderr,
+                 "livod decode: {}: {} as {}: {} datagrams on ports {} gave {} lidar packets, {} "
+                 "decode errors and {} points; datagrams per port in the capture: {}. Check "
+                 "--model, --port{}\n",
+                 args.capture, points == 0 ? "nothing decoded" : "mostly decode errors",
+                 decoder->model_name(), p.udp_datagrams, port_list, c.lidar_packets,
+                 c.decode_errors, points, ports_in_capture(args.capture),
+                 decoder->model_name().starts_with("Ouster") || config.metadata
+                     ? " and --metadata"
+                     : " and --calibration");
+      status = kExitFailure;
+    }
+    const io::InputLossLog& losses = reader.losses();
+    for (const auto& loss : losses.entries()) {
+      fmt::print(stderr, "livod decode: input lost: {}\n", io::format_loss(loss));
+    }
+    if (losses.not_listed() > 0) {
+      fmt::print(stderr, "livod decode: input lost: {} more damaged stretches not listed\n",
+                 losses.not_listed());
+    }
+    if (!losses.empty()) {
+      fmt::print(stderr,
+                 "livod decode: {} damaged stretch(es) skipped ({} bytes): {} covers only what "
+                 "could be read{}\n",
+                 losses.count(), losses.bytes(), args.output,
+                 args.accept_partial_input ? "; partial input accepted (--accept-partial-input)"
+                                           : "; --accept-partial-input accepts that");
+      if (!args.accept_partial_input && status == 0) status = kExitPartialInput;
+    }
+    return status;
   } catch (const std::exception& e) {
     fmt::print(stderr, "livod decode: {}\n", e.what());
     return kExitFailure;
@@ -148,7 +228,11 @@ void add_decode_command(CLI::App& app, CommandContext& ctx) {
   cmd->add_option("capture", args->capture, "pcap or pcapng capture")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--model", args->model, "Sensor model: " + drivers::known_models())->required();
+  cmd->add_option("--model", args->model,
+                  "Sensor model: " + drivers::known_models() +
+                      " (Ouster also by product name, e.g. OS1-128, cross-checked with the "
+                      "metadata)")
+      ->required();
   cmd->add_option("--calibration", args->calibration,
                   "Velodyne calibration: VeloView XML or ROS/nebula YAML (default: the model's "
                   "nominal table)")
@@ -160,6 +244,9 @@ void add_decode_command(CLI::App& app, CommandContext& ctx) {
                   "ports)");
   cmd->add_option("-o,--output", args->output, "Output file: .csv or .pcd")->required();
   cmd->add_flag("--pcd-ascii", args->pcd_ascii, "Write the PCD as ASCII instead of binary");
+  cmd->add_flag("--accept-partial-input", args->accept_partial_input,
+                "Exit 0 even when part of the capture could not be read (the losses are still "
+                "printed); without it such a decode exits with status 3");
   cmd->add_option("--config", args->config,
                   "livod configuration: the calibration/metadata files of its sensor with this "
                   "model are used (explicit --calibration/--metadata win)")

@@ -4,6 +4,8 @@
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+
 #include <memory>
 #include <optional>
 #include <string>
@@ -41,14 +43,26 @@ void add_eval_command(CLI::App& app, CommandContext& ctx) {
   cmd->add_option("--align", args->align, "Umeyama alignment of EST onto GT: se3 | sim3 | none")
       ->check(CLI::IsMember({"se3", "sim3", "none"}))
       ->capture_default_str();
+  // NaN passes CLI11's range checks (every comparison with it is false): refuse it explicitly.
+  const CLI::Validator finite(
+      [](const std::string& text) {
+        double v = 0.0;
+        return CLI::detail::lexical_cast(text, v) && std::isfinite(v)
+                   ? std::string()
+                   : "'" + text + "' is not a finite number";
+      },
+      "FINITE");
   cmd->add_option("--t-max-diff", args->options.max_time_diff_s,
                   "max. stamp difference for time association (s)")
+      ->check(finite)
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--t-offset", args->options.time_offset_s,
                   "offset added to EST stamps before association (s)")
+      ->check(finite)
       ->capture_default_str();
   cmd->add_option("--rpe-delta", args->options.rpe_delta, "RPE sub-sequence length")
+      ->check(finite)
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--rpe-unit", args->rpe_unit, "unit of --rpe-delta: m | s | frames")

@@ -29,6 +29,7 @@
 
 #include "daemon/commands/command.hpp"
 #include "io/candump.hpp"
+#include "io/input_loss.hpp"
 #include "io/pcap.hpp"
 
 namespace livod::daemon {
@@ -43,10 +44,9 @@ constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 std::vector<std::byte> read_head(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path.string() + ": cannot open");
-  std::array<char, kHeadBytes> buffer{};
-  in.read(buffer.data(), buffer.size());
-  std::vector<std::byte> head(static_cast<std::size_t>(in.gcount()));
-  std::memcpy(head.data(), buffer.data(), head.size());
+  std::vector<std::byte> head(kHeadBytes);
+  in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));  // an empty file gives an empty head
   return head;
 }
 
@@ -93,6 +93,18 @@ std::string histogram(const std::map<Key, std::uint64_t>& counts, std::size_t li
   }
   if (entries.size() > limit) out += fmt::format(", +{} more", entries.size() - limit);
   return out;
+}
+
+// Every stretch the reader had to skip (damaged records, unparsable lines), then the totals.
+void print_losses(const io::InputLossLog& losses) {
+  for (const auto& loss : losses.entries()) fmt::print("  lost        {}\n", io::format_loss(loss));
+  if (losses.not_listed() > 0) {
+    fmt::print("  lost        {} more damaged stretches not listed\n", losses.not_listed());
+  }
+  if (!losses.empty()) {
+    fmt::print("  damage      {} stretch(es), {} bytes skipped; the counts above cover the rest\n",
+               losses.count(), losses.bytes());
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -151,9 +163,7 @@ void inspect_capture(const fs::path& path) {
         "frame end)\n",
         s.ip_length_clamped);
   }
-  if (!reader.end_error().empty()) {
-    fmt::print("  ended early {}\n", reader.end_error());
-  }
+  print_losses(reader.losses());
   if (streams.empty()) return;
   fmt::print("  {:>8}  {:<29}  {:>9}  {:>11}  {}\n", "dst port", "source", "datagrams", "bytes",
              "payload sizes (bytes xcount)");
@@ -241,9 +251,7 @@ void inspect_candump(const fs::path& path) {
                histogram(interfaces, interfaces.size(), [](const std::string& n) { return n; }));
   }
   fmt::print("  lines       {} read, {} malformed skipped\n", stats.lines, stats.skipped);
-  if (!reader.first_skipped_error().empty()) {
-    fmt::print("  first error {}\n", reader.first_skipped_error());
-  }
+  print_losses(reader.losses());
   if (ids.empty()) return;
   fmt::print("  {:<14}  {:>8}  {:>9}  {:<12}  {}\n", "id", "frames", "rate Hz", "interfaces",
              "lengths (bytes xcount)");

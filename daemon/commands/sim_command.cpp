@@ -3,6 +3,8 @@
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <optional>
 #include <set>
 
 #include "daemon/commands/command.hpp"
@@ -30,7 +32,7 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
     std::string scenario;
     std::string scenario_file;
     std::uint64_t seed = 1;
-    double duration = 0.0;
+    std::optional<double> duration;
     std::string out;
     bool no_images = false;
     bool bag = false;
@@ -44,7 +46,9 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--seed", opts->seed, "Random seed (same seed, same bytes)")
       ->capture_default_str();
-  cmd->add_option("--duration", opts->duration, "Seconds to simulate (default: the scenario's)");
+  cmd->add_option("--duration", opts->duration,
+                  "Seconds to simulate, in (0, 3600] (default: the scenario's); a street world "
+                  "grows to hold the trajectory");
   cmd->add_option("-o,--output", opts->out, "Output folder");
   cmd->add_flag("--no-images", opts->no_images, "Write camera csv/yaml but no PNG files");
   cmd->add_flag("--bag", opts->bag,
@@ -90,7 +94,16 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
     sim::SimRunOptions run;
     run.out_dir = opts->out;
     run.seed = opts->seed;
-    if (opts->duration > 0.0) run.duration_s = opts->duration;
+    if (opts->duration) {
+      const double d = *opts->duration;
+      if (!(std::isfinite(d) && d > 0.0 && d <= sim::kMaxSimDurationS)) {
+        fmt::print(stderr, "livod sim: --duration {}: must be a number of seconds in (0, {}]\n", d,
+                   sim::kMaxSimDurationS);
+        ctx.exit_code = 2;
+        return;
+      }
+      run.duration_s = d;
+    }
     run.write_images = !opts->no_images;
     run.write_bag = opts->bag;
     if (opts->bag && opts->no_images && !scenario.cameras.empty()) {

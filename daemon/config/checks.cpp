@@ -366,6 +366,52 @@ void check_camera_sizes(ProblemList& problems, const LivodConfig& config,
   }
 }
 
+// What livod cannot run yet is an error here, at check-config time, never a silent no-op at run
+// time: a configured sensor the estimator would not use, or a driver that is not built.
+void check_implemented(ProblemList& problems, const LivodConfig& config,
+                       const std::vector<SensorSite>& sites) {
+  int first_lidar = -1;
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const SensorConfig& s = config.sensors[i];
+    if (!sites[i].driver_known || !s.enabled) continue;
+    const std::string where = sensor_label(sites, config, i);
+    switch (sensor_kind(s.driver)) {
+      case SensorKind::camera:
+        problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
+                       where + ": the estimator has no visual update yet, so a camera would be " +
+                           "ignored; set 'enabled: false' to keep its calibration in the file");
+        continue;
+      case SensorKind::lidar:
+        if (first_lidar >= 0) {
+          problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
+                         where + " and " +
+                             sensor_label(sites, config, static_cast<std::size_t>(first_lidar)) +
+                             " are both enabled, but the estimator fuses one LiDAR: disable one");
+        } else {
+          first_lidar = static_cast<int>(i);
+        }
+        break;
+      case SensorKind::imu:
+        if (sites[i].name_ok && config.body_sensor_index >= 0 &&
+            static_cast<std::size_t>(config.body_sensor_index) != i) {
+          problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
+                         where + " is not the body IMU (body_frame: " + config.body_frame +
+                             ") and the estimator takes one IMU: disable it or make it the body");
+        }
+        break;
+    }
+    if (s.driver == Driver::serial_imu) {
+      problems.error(ProblemKind::not_implemented, sites[i].path + ".driver", sites[i].at,
+                     where + ": no serial IMU protocol is implemented yet");
+    } else if (sites[i].source_ok && std::holds_alternative<DeviceSourceConfig>(s.source)) {
+      problems.error(ProblemKind::not_implemented, sites[i].path + ".source", sites[i].at,
+                     where + ": live " + std::string(enum_name(s.driver)) +
+                         " devices are not supported yet (a recording of it can be replayed: " +
+                         "source.replay)");
+    }
+  }
+}
+
 }  // namespace
 
 void check_sensors(ProblemList& problems, LivodConfig& config, const std::vector<SensorSite>& sites,
@@ -377,6 +423,7 @@ void check_sensors(ProblemList& problems, LivodConfig& config, const std::vector
   check_live_replay_mix(problems, config, sites);
   check_ports(problems, config, sites);
   check_camera_sizes(problems, config, sites);
+  check_implemented(problems, config, sites);
 }
 
 }  // namespace livod::daemon::config_detail

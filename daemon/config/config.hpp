@@ -201,13 +201,30 @@ struct LoggingSection {
   std::string level = "info";  // trace, debug, info, warn, error, critical, off
 };
 
+// LCM channel names (docs/lcm.md), before channel_suffix is appended. UPPER_SNAKE.
+struct LcmChannelNames {
+  std::string pose = "LIVOD_POSE";          // livod.pose_t, one per filter update
+  std::string pose_imu = "LIVOD_POSE_IMU";  // livod.pose_t, one per body-IMU sample
+  std::string health = "LIVOD_HEALTH";      // livod.health_t, once per health period
+  std::string cloud = "LIVOD_CLOUD";        // livod.cloud_t, one per filter update
+  std::string bot_core_pose = "POSE_BODY";  // libbot2's bot_core.pose_t
+};
+
 struct LcmOutputConfig {
   bool enabled = true;
+  // ttl=0: multicast never leaves the host unless the configuration asks for it.
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   std::string channel_suffix;  // appended to every channel, e.g. "_REPLAY"
+  LcmChannelNames channels;
   bool publish_imu_rate = true;
   bool publish_cloud = false;
   int cloud_max_points = 20000;  // LIVOD_CLOUD is decimated to at most this many points
+  // bot_core.pose_t on channels.bot_core_pose: the IMU-rate pose when publish_imu_rate is on,
+  // else the filter-rate pose.
+  bool publish_bot_core_pose = true;
+
+  // Full channel names (suffix appended).
+  [[nodiscard]] std::string channel(const std::string& name) const { return name + channel_suffix; }
 };
 
 struct OutputsConfig {
@@ -227,6 +244,8 @@ struct HealthConfig {
 struct RealtimeConfig {
   int capture_priority = 0;
   int scheduler_priority = 0;
+  int capture_cpu = -1;      // pin every capture thread to this CPU; -1 = any
+  int scheduler_cpu = -1;    // pin the scheduler thread to this CPU; -1 = any
   bool lock_memory = false;  // mlockall(MCL_CURRENT | MCL_FUTURE)
 };
 

@@ -61,6 +61,8 @@ void read_health(MapReader& m, HealthConfig& health) {
 void read_realtime(MapReader& m, RealtimeConfig& realtime) {
   m.read("capture_priority", realtime.capture_priority, 0, 99);
   m.read("scheduler_priority", realtime.scheduler_priority, 0, 99);
+  m.read("capture_cpu", realtime.capture_cpu, -1, 1023);
+  m.read("scheduler_cpu", realtime.scheduler_cpu, -1, 1023);
   m.read("lock_memory", realtime.lock_memory);
   m.finish();
 }

@@ -36,6 +36,8 @@ std::string_view to_string(ProblemKind kind) {
       return "missing_file";
     case ProblemKind::inconsistent:
       return "inconsistent";
+    case ProblemKind::not_implemented:
+      return "not implemented";
   }
   return "unknown";
 }

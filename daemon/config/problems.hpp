@@ -26,6 +26,7 @@ enum class ProblemKind {
   missing_extrinsic,  // a sensor other than the body IMU without extrinsic
   missing_file,       // a referenced file or folder does not exist
   inconsistent,       // values that are fine alone but contradict each other
+  not_implemented,    // valid, but livod cannot do it yet: an error, never silently ignored
 };
 
 struct ConfigProblem {

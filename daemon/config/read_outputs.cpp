@@ -1,6 +1,8 @@
 // Reads `outputs:`: the LCM publisher and the files written by a run.
 
 #include <algorithm>
+#include <array>
+#include <string>
 #include <system_error>
 
 #include "daemon/config/readers.hpp"
@@ -12,6 +14,15 @@ namespace {
 // LCM 1.3 providers; "udpm" is the network one, the rest are for tests and tools.
 constexpr std::array<std::string_view, 5> kLcmProviders = {"udpm://", "mpudpm://", "memq://",
                                                            "file://", "tcpq://"};
+
+// LCM_MAX_CHANNEL_NAME_LENGTH of lcm.h: longer names are refused by lcm_publish.
+constexpr std::size_t kLcmMaxChannelLength = 63;
+
+bool is_upper_snake(const std::string& s) {
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+  });
+}
 
 void check_udpm_group(ProblemList& problems, const Value& v, const std::string& url) {
   // udpm://GROUP:PORT?options
@@ -52,12 +63,11 @@ void read_lcm(ProblemList& problems, const Value& value, LcmOutputConfig& lcm) {
       }
     }
   }
+  Position suffix_at = m.at();
   if (const auto v = m.take("channel_suffix"); v && !v->node.IsNull()) {
+    suffix_at = v->at;
     if (const auto s = parse_string(problems, *v)) {
-      const bool upper_snake = std::all_of(s->begin(), s->end(), [](char c) {
-        return (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
-      });
-      if (upper_snake) {
+      if (is_upper_snake(*s)) {
         lcm.channel_suffix = *s;
       } else {
         problems.error(ProblemKind::invalid_value, v->path, v->at,
@@ -68,7 +78,79 @@ void read_lcm(ProblemList& problems, const Value& value, LcmOutputConfig& lcm) {
   m.read("publish_imu_rate", lcm.publish_imu_rate);
   m.read("publish_cloud", lcm.publish_cloud);
   m.read("cloud_max_points", lcm.cloud_max_points, 100, 10000000);
+  m.read("publish_bot_core_pose", lcm.publish_bot_core_pose);
+
+  // channels: {pose, pose_imu, health, cloud, bot_core_pose}
+  struct Channel {
+    const char* key;
+    std::string* name;
+    bool used;
+    bool ok = true;
+    bool given = false;
+    std::string path;
+    Position at;
+  };
+  std::array<Channel, 5> channels = {{
+      {"pose", &lcm.channels.pose, true},
+      {"pose_imu", &lcm.channels.pose_imu, lcm.publish_imu_rate},
+      {"health", &lcm.channels.health, true},
+      {"cloud", &lcm.channels.cloud, lcm.publish_cloud},
+      {"bot_core_pose", &lcm.channels.bot_core_pose, lcm.publish_bot_core_pose},
+  }};
+  MapReader cm = m.map("channels");
+  for (Channel& c : channels) {
+    c.path = cm.child_path(c.key);
+    const auto v = cm.take(c.key);
+    if (!v || v->node.IsNull()) continue;
+    c.given = true;
+    c.path = v->path;
+    c.at = v->at;
+    const auto name = parse_string(problems, *v);
+    if (!name) {
+      c.ok = false;
+      continue;
+    }
+    if (name->empty() || !is_upper_snake(*name)) {
+      problems.error(ProblemKind::invalid_value, v->path, v->at,
+                     "'" + *name + "' is not an UPPER_SNAKE channel name (A-Z, 0-9, _)");
+      c.ok = false;
+      continue;
+    }
+    *c.name = *name;
+  }
+  cm.finish();
   m.finish();
+
+  // Too long with the suffix: reported on the channel when it was given, else once on the suffix.
+  std::string too_long_defaults;
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    const Channel& c = channels[i];
+    if (!c.ok) continue;
+    const std::string full = lcm.channel(*c.name);
+    if (full.size() > kLcmMaxChannelLength) {
+      if (c.given) {
+        problems.error(ProblemKind::out_of_range, c.path, c.at,
+                       "channel '" + full + "' (with the suffix) is " +
+                           std::to_string(full.size()) + " bytes; LCM allows " +
+                           std::to_string(kLcmMaxChannelLength));
+      } else {
+        too_long_defaults += (too_long_defaults.empty() ? "" : ", ") + full;
+      }
+    }
+    if (!c.used) continue;
+    for (std::size_t j = 0; j < i; ++j) {
+      if (channels[j].ok && channels[j].used && *channels[j].name == *c.name) {
+        problems.error(ProblemKind::inconsistent, c.path, c.at,
+                       "'" + *c.name + "' is also the " + channels[j].key +
+                           " channel: two message types on one channel break subscribers");
+      }
+    }
+  }
+  if (!too_long_defaults.empty()) {
+    problems.error(ProblemKind::out_of_range, m.child_path("channel_suffix"), suffix_at,
+                   "makes channel names longer than LCM's " + std::to_string(kLcmMaxChannelLength) +
+                       " bytes: " + too_long_defaults);
+  }
 }
 
 // An output file: null = none. Its folder must exist (livod does not create folders: a typo in

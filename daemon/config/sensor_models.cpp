@@ -139,7 +139,9 @@ FrameCutMode default_frame_cut(Driver driver) {
 std::vector<FrameCutMode> allowed_frame_cuts(Driver driver) {
   switch (driver) {
     case Driver::ouster:
-      return {FrameCutMode::frame_id, FrameCutMode::azimuth, FrameCutMode::time};
+      // The Ouster decoder cuts at the sensor's own frame boundaries only; an azimuth or time cut
+      // would be accepted here and refused by the run.
+      return {FrameCutMode::frame_id};
     case Driver::velodyne:
       return {FrameCutMode::azimuth, FrameCutMode::time};
     case Driver::livox_sdk1:

@@ -112,7 +112,10 @@ std::string summarize_config(const LivodConfig& config) {
   if (lcm.enabled) {
     out << lcm.url;
     if (!lcm.channel_suffix.empty()) out << " (channel suffix " << lcm.channel_suffix << ')';
-    out << (lcm.publish_imu_rate ? ", IMU-rate pose" : "") << (lcm.publish_cloud ? ", cloud" : "");
+    out << (lcm.publish_imu_rate ? ", IMU-rate pose" : "") << (lcm.publish_cloud ? ", cloud" : "")
+        << (lcm.publish_bot_core_pose
+                ? ", bot_core pose on " + lcm.channel(lcm.channels.bot_core_pose)
+                : std::string());
   } else {
     out << "off";
   }

@@ -20,7 +20,9 @@ constexpr double kStandardGravity = 9.80665;  // m/s^2 per g
 // The cursor over one topic and the message it has read ahead.
 class BagTopic {
  public:
-  BagTopic(const std::filesystem::path& file, const std::string& topic) : bag_(file) {
+  // The bag is read with recovery: a missing index is rebuilt, damage is read past and reported.
+  BagTopic(const std::filesystem::path& file, const std::string& topic)
+      : bag_(file, rb::BagReader::Options{.recover = true}) {
     for (const auto& c : bag_.connections()) {
       if (c.topic == topic) {
         type_ = c.type;
@@ -67,6 +69,18 @@ class BagTopic {
     return static_cast<double>(last_ns_ - start_ns_) / static_cast<double>(end_ns_ - start_ns_);
   }
   [[nodiscard]] std::uint64_t messages() const { return messages_; }
+  [[nodiscard]] const std::string& file() const { return bag_.source(); }
+
+  [[nodiscard]] io::InputLossLog losses() const {
+    io::InputLossLog log = bag_.losses();
+    if (cursor_) log.merge(cursor_->losses());
+    return log;
+  }
+  [[nodiscard]] std::vector<std::string> notes() const {
+    if (!bag_.recovered()) return {};
+    return {bag_.source() + ": the bag index is missing or broken (" + bag_.index_problem() +
+            "): it was rebuilt by scanning the chunks, as rosbag reindex does"};
+  }
 
  private:
   rb::BagReader bag_;
@@ -107,10 +121,18 @@ void decode_custom_msg(const rb::BagMessage& m, rb::livox_ros_driver::CustomMsg&
 // field, a topic of another layout): that stops the replay with the first error.
 class MalformedMessages {
  public:
-  explicit MalformedMessages(std::string where) : where_(std::move(where)) {}
+  MalformedMessages(std::string where, std::string file)
+      : where_(std::move(where)), file_(std::move(file)) {}
 
   void ok() { ++ok_; }
-  void failed(const std::exception& e) {
+  void failed(const std::exception& e, std::int64_t time_ns) {
+    io::InputLoss loss;
+    loss.file = file_;
+    loss.records = 1;
+    loss.unit = "messages";
+    loss.reason = fmt::format("{}: the message recorded at {:.6f} s does not decode: {}", where_,
+                              static_cast<double>(time_ns) * 1e-9, e.what());
+    losses_.add(std::move(loss));
     if (count_++ == 0) first_ = e.what();
     if (ok_ == 0 && count_ >= kGiveUpAfter) {
       throw Error(where_ + ": the first " + std::to_string(count_) +
@@ -118,10 +140,13 @@ class MalformedMessages {
     }
   }
   [[nodiscard]] std::uint64_t count() const { return count_; }
+  [[nodiscard]] const io::InputLossLog& losses() const { return losses_; }
 
  private:
   static constexpr std::uint64_t kGiveUpAfter = 5;
   std::string where_;
+  std::string file_;
+  io::InputLossLog losses_;
   std::string first_;
   std::uint64_t ok_ = 0;
   std::uint64_t count_ = 0;
@@ -132,13 +157,19 @@ class MalformedMessages {
 class BagTopicSource : public ReplaySource {
  public:
   BagTopicSource(BagTopic topic, std::string where)
-      : topic_(std::move(topic)), malformed_(std::move(where)) {}
+      : topic_(std::move(topic)), malformed_(std::move(where), topic_.file()) {}
 
   std::optional<std::int64_t> peek_time() override { return topic_.peek_time(); }
   void finish(const drivers::DecoderSinks& /*sinks*/) override {}
   [[nodiscard]] std::optional<double> fraction_done() const override {
     return topic_.fraction_done();
   }
+  [[nodiscard]] io::InputLossLog input_losses() const override {
+    io::InputLossLog log = topic_.losses();
+    log.merge(malformed_.losses());
+    return log;
+  }
+  [[nodiscard]] std::vector<std::string> notes() const override { return topic_.notes(); }
 
  protected:
   // The next message, once `decode(message)` has read it; nullopt at the end or when the message
@@ -150,7 +181,7 @@ class BagTopicSource : public ReplaySource {
     try {
       decode(*m);
     } catch (const FormatError& e) {
-      malformed_.failed(e);
+      malformed_.failed(e, m->time_ns);
       return std::nullopt;
     }
     malformed_.ok();
@@ -277,6 +308,44 @@ class BagPacketSource final : public BagTopicSource {
 };
 
 }  // namespace
+
+drivers::ouster::SensorMetadata bag_ouster_metadata(const std::filesystem::path& file,
+                                                    const std::string& packet_topic) {
+  const rb::BagReader bag(file, rb::BagReader::Options{.recover = true});
+  const std::string sibling = packet_topic.substr(0, packet_topic.rfind('/') + 1) + "metadata";
+  const auto is_string = [](const rb::TopicInfo& t) {
+    return t.type == rb::MessageTraits<rb::std_msgs::String>::type;
+  };
+  std::vector<std::string> candidates;
+  for (const auto& t : bag.topics()) {
+    if (!is_string(t)) continue;
+    if (t.topic == sibling) {
+      candidates = {t.topic};
+      break;
+    }
+    if (t.topic.size() >= 8 && t.topic.ends_with("metadata")) candidates.push_back(t.topic);
+  }
+  if (candidates.size() != 1) {
+    throw Error(bag.source() + ": no 'metadata' given and the bag has " +
+                (candidates.empty() ? std::string("no std_msgs/String metadata topic")
+                                    : "several metadata topics") +
+                " (expected " + sibling + "); give the sensor's metadata JSON ('metadata')");
+  }
+  rb::BagQuery query;
+  query.topics = candidates;
+  auto cursor = bag.read(query);
+  const auto message = cursor.next();
+  if (!message) {
+    io::InputLossLog losses = bag.losses();
+    losses.merge(cursor.losses());
+    throw Error(bag.source() + ": topic " + candidates[0] + " has no message" +
+                (losses.empty()
+                     ? std::string()
+                     : " (the bag is damaged: " + io::format_loss(losses.entries()[0]) + ")"));
+  }
+  const auto text = message->as<rb::std_msgs::String>();
+  return drivers::ouster::parse_metadata(text.data, bag.source() + " topic " + candidates[0]);
+}
 
 std::unique_ptr<ReplaySource> make_bag_source(const std::filesystem::path& file,
                                               const std::string& topic, const SensorConfig& sensor,

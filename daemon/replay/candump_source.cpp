@@ -15,7 +15,7 @@ namespace {
 class SbgCandumpSource final : public ReplaySource {
  public:
   SbgCandumpSource(const std::filesystem::path& file, const SbgCanIds& ids)
-      : reader_(file), decoder_(imu::SbgCanIds{ids.info, ids.accel, ids.gyro}) {}
+      : reader_(file, {.lenient = true}), decoder_(imu::SbgCanIds{ids.info, ids.accel, ids.gyro}) {}
 
   std::optional<std::int64_t> peek_time() override {
     if (!have_frame_ && !ended_) {
@@ -45,6 +45,9 @@ class SbgCandumpSource final : public ReplaySource {
   }
 
   void finish(const drivers::DecoderSinks& /*sinks*/) override {}
+
+  // Lines that do not parse are skipped (read past) and reported as lost.
+  [[nodiscard]] io::InputLossLog input_losses() const override { return reader_.losses(); }
 
   [[nodiscard]] std::string summary() const override {
     const auto& c = decoder_.counters();

@@ -3,9 +3,9 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "daemon/config/sensor_models.hpp"
 #include "drivers/livox/livox_decoder.hpp"
 #include "drivers/ouster/ouster_decoder.hpp"
-#include "drivers/ouster/ouster_factory.hpp"
 #include "drivers/velodyne/velodyne_decoder.hpp"
 
 namespace livod::daemon::replay {
@@ -44,18 +44,19 @@ std::unique_ptr<drivers::LidarDecoder> make_velodyne(const SensorConfig& sensor)
   return std::make_unique<vd::VelodyneDecoder>(options);
 }
 
-std::unique_ptr<drivers::LidarDecoder> make_ouster(const SensorConfig& sensor) {
+void check_ouster_frame_cut(const SensorConfig& sensor) {
   if (sensor.frame_cut.mode != FrameCutMode::frame_id) {
     throw Error(label(sensor) + ": the Ouster decoder cuts scans by frame id only (frame_cut: " +
                 "{mode: frame_id})");
   }
+}
+
+std::unique_ptr<drivers::LidarDecoder> make_ouster(const SensorConfig& sensor) {
+  check_ouster_frame_cut(sensor);
   if (sensor.metadata.empty()) {
     throw Error(label(sensor) + ": replay needs the sensor metadata JSON ('metadata')");
   }
-  drivers::DecoderConfig config;
-  config.model = "OS";
-  config.metadata = sensor.metadata;
-  return drivers::ouster::make_ouster_decoder(config);
+  return make_ouster_decoder(sensor, drivers::ouster::load_metadata(sensor.metadata));
 }
 
 std::unique_ptr<drivers::LidarDecoder> make_livox(const SensorConfig& sensor) {
@@ -67,6 +68,34 @@ std::unique_ptr<drivers::LidarDecoder> make_livox(const SensorConfig& sensor) {
 }
 
 }  // namespace
+
+std::string ouster_model_mismatch(const SensorConfig& sensor,
+                                  const drivers::ouster::SensorMetadata& metadata) {
+  if (sensor.model.empty()) return {};
+  const auto configured = canonical_model(Driver::ouster, sensor.model);
+  const auto recorded = canonical_model(Driver::ouster, metadata.prod_line);
+  const std::size_t beams = metadata.beam_altitude_angles_deg.size();
+  std::string configured_beams;
+  if (configured) configured_beams = configured->substr(configured->rfind('-') + 1);
+  if (recorded && configured && *recorded != *configured) {
+    return "model " + *configured + " contradicts the metadata, which describes an " +
+           metadata.prod_line + " (" + std::to_string(beams) + " beams)";
+  }
+  if (configured && !configured_beams.empty() && configured_beams != std::to_string(beams)) {
+    return "model " + *configured + " (" + configured_beams +
+           " beams) contradicts the metadata, which has " + std::to_string(beams) + " beams";
+  }
+  return {};
+}
+
+std::unique_ptr<drivers::LidarDecoder> make_ouster_decoder(
+    const SensorConfig& sensor, const drivers::ouster::SensorMetadata& metadata) {
+  check_ouster_frame_cut(sensor);
+  if (const std::string mismatch = ouster_model_mismatch(sensor, metadata); !mismatch.empty()) {
+    throw Error(label(sensor) + ": " + mismatch);
+  }
+  return std::make_unique<drivers::ouster::OusterDecoder>(metadata);
+}
 
 std::unique_ptr<drivers::LidarDecoder> make_lidar_decoder(const SensorConfig& sensor) {
   switch (sensor.driver) {

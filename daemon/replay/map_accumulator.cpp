@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/hash_mix.hpp"
+#include "io/output_file.hpp"
 
 namespace livod::daemon::replay {
 namespace {
@@ -31,9 +32,13 @@ bool MapAccumulator::add(const Eigen::Vector3d& p) {
   std::uint64_t key = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const double c = std::floor(p[axis] * inv_cell_);
-    if (!(std::abs(c) < static_cast<double>(kCoordBias))) return false;  // also NaN
-    const auto biased = static_cast<std::int64_t>(c) + kCoordBias;
-    if (biased <= 0 || biased > kCoordLimit) return false;
+    const auto biased = std::abs(c) < static_cast<double>(kCoordBias)  // false for NaN
+                            ? static_cast<std::int64_t>(c) + kCoordBias
+                            : std::int64_t{0};
+    if (biased <= 0 || biased > kCoordLimit) {
+      ++dropped_outside_;
+      return false;
+    }
     key = (key << 21) | static_cast<std::uint64_t>(biased);
   }
   const std::size_t mask = table_.size() - 1;
@@ -52,6 +57,10 @@ bool MapAccumulator::add(const Eigen::Vector3d& p) {
   xyz_.push_back(static_cast<float>(p.z()));
   if (2 * size() > table_.size()) grow();
   return true;
+}
+
+double MapAccumulator::grid_half_extent_m() const {
+  return static_cast<double>(kCoordBias - 1) / inv_cell_;
 }
 
 void MapAccumulator::grow() {
@@ -73,8 +82,8 @@ std::size_t MapAccumulator::bytes() const {
 
 void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
   const std::size_t n = xyz.size() / 3;
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw Error("cannot create " + path.string());
+  io::OutputFile file(path, true);
+  std::ostream& out = file.stream();
   out << "# .PCD v0.7 - Point Cloud Data file format\n"
       << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
       << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
@@ -82,8 +91,7 @@ void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz)
   // runs on.
   out.write(reinterpret_cast<const char*>(xyz.data()),
             static_cast<std::streamsize>(n * 3 * sizeof(float)));
-  out.flush();
-  if (!out) throw Error("cannot write " + path.string());
+  file.commit();
 }
 
 }  // namespace livod::daemon::replay

@@ -27,6 +27,10 @@ class MapAccumulator {
 
   [[nodiscard]] std::size_t size() const { return xyz_.size() / 3; }
   [[nodiscard]] std::uint64_t dropped_full() const { return dropped_full_; }
+  // Points beyond the cell grid (+-1,048,575 cells per axis) or not finite: not mapped.
+  [[nodiscard]] std::uint64_t dropped_outside() const { return dropped_outside_; }
+  // Half the extent of the grid along each axis (m).
+  [[nodiscard]] double grid_half_extent_m() const;
   // Heap bytes held (point storage + table capacity).
   [[nodiscard]] std::size_t bytes() const;
   [[nodiscard]] const std::vector<float>& xyz() const { return xyz_; }
@@ -39,6 +43,7 @@ class MapAccumulator {
   std::vector<float> xyz_;
   std::vector<std::uint64_t> table_;  // 0 = empty slot; keys are never 0 (see the .cpp)
   std::uint64_t dropped_full_ = 0;
+  std::uint64_t dropped_outside_ = 0;
 };
 
 // Writes x y z float32 points as a binary PCD v0.7 file (the header PCL and CloudCompare read).

@@ -34,6 +34,8 @@ class PcapSource final : public ReplaySource {
 
   void finish(const drivers::DecoderSinks& sinks) override { decoder_->flush(sinks); }
 
+  [[nodiscard]] io::InputLossLog input_losses() const override { return reader_.losses(); }
+
   [[nodiscard]] std::string summary() const override {
     const auto& c = decoder_->counters();
     const auto& p = reader_.stats();

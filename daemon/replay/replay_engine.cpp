@@ -2,22 +2,19 @@
 
 #include <fmt/core.h>
 
-#include <time.h>
-
 #include <chrono>
 #include <fstream>
-#include <memory>
-#include <optional>
 
 #include "core/error.hpp"
+#include "daemon/replay/file_outputs.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/map_accumulator.hpp"
 #include "daemon/replay/progress.hpp"
-#include "daemon/runtime/sensor_clock.hpp"
 #include "daemon/replay/sources.hpp"
-#include "daemon/replay/trajectory_writer.hpp"
+#include "daemon/runtime/scheduler.hpp"
+#include "daemon/runtime/signals.hpp"
 #include "daemon/worker_pool.hpp"
-#include "estimator/pipeline.hpp"
+#include "io/output_file.hpp"
 
 namespace livod::daemon::replay {
 namespace {
@@ -26,64 +23,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-// CPU time of this process, every thread (s): unlike wall time, it does not count time spent
-// preempted by other processes, so per-frame figures stay meaningful on a loaded machine. With
-// the worker pool it is the CPU a frame costs in all, which exceeds its wall time when both cores
-// work.
-double process_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-// One replayed sensor: its recording, its clock and what it gives the estimator.
-struct ReplayedSensor {
-  const SensorConfig* config = nullptr;
-  std::string role;
-  std::string file;
-  std::unique_ptr<ReplaySource> source;
-  std::unique_ptr<runtime::SensorClockMapper> clock;
-  bool scans_to_estimator = false;
-  bool imu_to_estimator = false;
-  bool imu_usable =
-      false;  // its IMU samples may feed the clock (an enabled internal IMU, or an IMU)
-  drivers::DecoderSinks sinks;
-  std::uint64_t scans = 0;
-  std::uint64_t imu_samples = 0;
-};
-
-// The per-frame columns kept for the report's distributions (4 bytes each per frame).
-struct FrameSeries {
-  std::vector<float> total, cpu, propagate, undistort, downsample, residuals, update, map;
-  std::vector<float> raw_points, used_points, matched, iterations;
-
-  void add(const estimator::FrameReport& r, double cpu_ms) {
-    const auto& t = r.timings;
-    total.push_back(static_cast<float>(t.total_ms));
-    cpu.push_back(static_cast<float>(cpu_ms));
-    propagate.push_back(static_cast<float>(t.propagate_ms));
-    undistort.push_back(static_cast<float>(t.undistort_ms));
-    downsample.push_back(static_cast<float>(t.downsample_ms));
-    residuals.push_back(static_cast<float>(t.residuals_ms));
-    update.push_back(static_cast<float>(t.update_ms));
-    map.push_back(static_cast<float>(t.map_ms));
-    raw_points.push_back(static_cast<float>(r.raw_points));
-    used_points.push_back(static_cast<float>(r.used_points));
-    matched.push_back(static_cast<float>(r.matched));
-    iterations.push_back(static_cast<float>(r.iterations));
-  }
-};
-
-// Picks the estimator's LiDAR: the body IMU's own LiDAR, else the first enabled LiDAR.
-int estimator_lidar(const LivodConfig& config) {
-  if (config.body_is_internal_imu) return config.body_sensor_index;
-  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
-    const auto& s = config.sensors[i];
-    if (s.enabled && sensor_kind(s.driver) == SensorKind::lidar) return static_cast<int>(i);
-  }
-  return -1;
 }
 
 ClockSummary clock_summary(const runtime::SensorClockMapper& mapper) {
@@ -103,78 +42,21 @@ ClockSummary clock_summary(const runtime::SensorClockMapper& mapper) {
 }
 
 void write_text_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::trunc);
-  out << text;
-  out.flush();
-  if (!out) throw Error("cannot write " + path.string());
+  io::write_file(path, text);
 }
 
-class Replay {
- public:
-  Replay(const LivodConfig& config, const ReplayOptions& options)
-      : config_(config), options_(options), map_(options.map_cell_m, options.map_max_points) {}
-
-  ReplayResult run();
-
- private:
-  void select_sensors();
-  void open_outputs();
-  void on_output(const estimator::PipelineOutput& o);
-  // Runs the estimator on what is queued; returns its wall time (s) without the outputs'.
-  double process();
-  [[nodiscard]] ProgressState progress_state() const;
-  ReplaySummary summarise(double wall_s) const;
-
-  const LivodConfig& config_;
-  const ReplayOptions& options_;
-  ReplayResult result_;
-  std::vector<std::unique_ptr<ReplayedSensor>> sensors_;  // in configuration order
-  std::unique_ptr<WorkerPool> pool_;  // before pipeline_: the pipeline uses it until destroyed
-  std::unique_ptr<estimator::LioPipeline> pipeline_;
-  Eigen::Isometry3d T_imu_lidar_ = Eigen::Isometry3d::Identity();
-  std::optional<TrajectoryWriter> trajectory_;
-  std::optional<FrameTable> frames_;
-  MapAccumulator map_;
-  FrameSeries series_;
-  // Frames output by the process() call under way: their rows wait for its CPU time.
-  struct PendingFrame {
-    estimator::FrameReport report;
-    std::size_t exported_points = 0;
-    std::size_t rss_bytes = 0;
-  };
-  std::vector<PendingFrame> pending_;
-  double output_cpu_s_ = 0.0;
-  std::size_t map_bytes_peak_ = 0;
-  std::size_t frame_count_ = 0;
-  double last_frame_ms_ = 0.0;
-  double output_s_ = 0.0;
-  std::optional<std::int64_t> first_event_ns_;
-  std::int64_t last_event_ns_ = 0;
-  std::optional<double> fraction_;
-};
-
-void Replay::select_sensors() {
-  if (config_.body_sensor_index < 0) {
-    throw Error("the configuration names no body IMU (body_frame): the estimator needs one");
-  }
-  const int lidar = estimator_lidar(config_);
-  if (lidar < 0) throw Error("the configuration has no enabled LiDAR: the estimator needs one");
-  const auto body = static_cast<std::size_t>(config_.body_sensor_index);
-  const auto lidar_index = static_cast<std::size_t>(lidar);
-  T_imu_lidar_ = config_.sensors[lidar_index].T_body_sensor;
-
-  const auto recordings = assign_recordings(config_, options_.inputs);
-  for (std::size_t i = 0; i < config_.sensors.size(); ++i) {
-    const SensorConfig& s = config_.sensors[i];
-    const bool is_body = i == body;
-    const bool is_lidar = i == lidar_index;
-    if (!is_body && !is_lidar) {
-      result_.notes.push_back(fmt::format("sensor '{}' ({}) is not replayed: {}", s.name,
-                                          enum_name(s.driver),
-                                          !s.enabled ? "disabled"
-                                          : sensor_kind(s.driver) == SensorKind::camera
-                                              ? "replay runs LiDAR-inertial odometry only"
-                                              : "the estimator takes the body IMU and one LiDAR"));
+// The recordings of the sensors the estimator uses, as runtime sources.
+std::vector<runtime::SensorInput> open_recordings(const LivodConfig& config,
+                                                  const runtime::SensorRoles& roles,
+                                                  const std::vector<std::string>& inputs,
+                                                  std::vector<std::string>& notes) {
+  const auto recordings = assign_recordings(config, inputs);
+  std::vector<runtime::SensorInput> out;
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const SensorConfig& s = config.sensors[i];
+    if (!roles.unused_reason[i].empty()) {
+      notes.push_back(fmt::format("sensor '{}' ({}) is not replayed: {}", s.name,
+                                  enum_name(s.driver), roles.unused_reason[i]));
       continue;
     }
     const auto& recording = recordings[i];
@@ -182,204 +64,137 @@ void Replay::select_sensors() {
       throw Error("sensor '" + s.name + "' has no recording to replay: its source is live; give " +
                   "one on the command line (" + s.name + "=PATH)");
     }
-    auto r = std::make_unique<ReplayedSensor>();
-    r->config = &s;
-    r->file = recording->replay.file.string();
-    if (!recording->replay.topic.empty()) r->file += " " + recording->replay.topic;
-    r->scans_to_estimator = is_lidar;
-    r->imu_to_estimator = is_body;
-    r->imu_usable = sensor_kind(s.driver) == SensorKind::imu || s.imu.enabled;
-    r->role = is_lidar && is_body ? "lidar + body imu" : is_lidar ? "lidar" : "body imu";
-    r->source = make_source(s, recording->replay, recording->ports);
-    r->clock = std::make_unique<runtime::SensorClockMapper>(s);
-    ReplayedSensor* self = r.get();
-    // The sinks run only inside run()'s loop, once pipeline_ exists.
-    r->sinks.on_imu = [this, self](const ImuSample& sample) {
-      if (!self->imu_usable) return;
-      ImuSample m = sample;
-      self->clock->map_imu(m);
-      ++self->imu_samples;
-      if (self->imu_to_estimator) pipeline_->add_imu(m);
-    };
-    r->sinks.on_scan = [this, self](const LidarScan& scan) {
-      if (!self->scans_to_estimator) return;
-      // The decoder reuses its scan: one copy, stamped and moved into the estimator's queue.
-      LidarScan copy = scan;
-      self->clock->map_scan(copy);
-      ++self->scans;
-      pipeline_->add_scan(std::move(copy));
-    };
-    sensors_.push_back(std::move(r));
+    runtime::SensorInput in;
+    in.sensor_index = i;
+    in.origin = recording->replay.file.string();
+    if (!recording->replay.topic.empty()) in.origin += " " + recording->replay.topic;
+    in.source = make_source(s, recording->replay, recording->ports);
+    out.push_back(std::move(in));
   }
+  return out;
 }
 
-void Replay::open_outputs() {
-  std::filesystem::create_directories(options_.out_dir);
-  result_.trajectory = options_.out_dir / "trajectory.txt";
-  result_.map = options_.out_dir / "map.pcd";
-  result_.timing_text = options_.out_dir / "timing.txt";
-  result_.timing_json = options_.out_dir / "timing.json";
-  result_.frames_csv = options_.out_dir / "frames.csv";
-  trajectory_.emplace(result_.trajectory);
-  frames_.emplace(result_.frames_csv);
-}
-
-void Replay::on_output(const estimator::PipelineOutput& o) {
-  const auto t0 = Clock::now();
-  const double cpu0 = process_cpu_s();
-  trajectory_->write(o.t, o.x.R_world_imu, o.x.p_world_imu);
-  const Eigen::Matrix3d R_world_lidar = o.x.R_world_imu * T_imu_lidar_.linear();
-  const Eigen::Vector3d p_world_lidar =
-      o.x.R_world_imu * T_imu_lidar_.translation() + o.x.p_world_imu;
-  for (const auto& p : pipeline_->last_scan_points()) map_.add(R_world_lidar * p + p_world_lidar);
-  pending_.push_back(PendingFrame{o.report, map_.size(), current_rss_bytes()});
-  map_bytes_peak_ = std::max(map_bytes_peak_, o.report.map.bytes);
-  last_frame_ms_ = o.report.timings.total_ms;
-  output_cpu_s_ += process_cpu_s() - cpu0;
-  output_s_ += seconds_since(t0);
-}
-
-double Replay::process() {
-  const auto t0 = Clock::now();
-  const double output_before = output_s_;
-  const double cpu0 = process_cpu_s();
-  output_cpu_s_ = 0.0;
-  pipeline_->process([this](const estimator::PipelineOutput& o) { on_output(o); });
-  if (!pending_.empty()) {
-    // One scan per call in practice; when several were due they share the call's CPU time.
-    const double cpu_ms =
-        1e3 * (process_cpu_s() - cpu0 - output_cpu_s_) / static_cast<double>(pending_.size());
-    for (const auto& f : pending_) {
-      frames_->add(frame_count_, f.report, cpu_ms, f.exported_points, f.rss_bytes);
-      series_.add(f.report, cpu_ms);
-      ++frame_count_;
-    }
-    pending_.clear();
-  }
-  return seconds_since(t0) - (output_s_ - output_before);
-}
-
-ProgressState Replay::progress_state() const {
+ProgressState progress_state(const runtime::Scheduler& scheduler) {
   ProgressState p;
-  if (first_event_ns_) p.recording_s = to_seconds(Nanoseconds(last_event_ns_ - *first_event_ns_));
-  p.fraction = fraction_;
-  p.frames = frame_count_;
-  p.last_frame_ms = last_frame_ms_;
-  if (!pipeline_->initialised()) p.status = "IMU init: " + pipeline_->init_status();
+  const auto& st = scheduler.stats();
+  if (st.first_event_ns) {
+    p.recording_s = to_seconds(Nanoseconds(st.last_event_ns - *st.first_event_ns));
+  }
+  p.fraction = scheduler.fraction_done();
+  p.frames = st.frames;
+  p.last_frame_ms = scheduler.last_frame_ms();
+  if (!scheduler.pipeline().initialised()) {
+    p.status = "IMU init: " + scheduler.pipeline().init_status();
+  }
   return p;
 }
 
-ReplayResult Replay::run() {
-  select_sensors();
-  estimator::PipelineOptions po;
-  po.params = config_.estimator;
-  po.T_imu_lidar = T_imu_lidar_;
+}  // namespace
+
+ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options) {
+  ReplayResult result;
+  const runtime::SensorRoles roles = runtime::assign_roles(config);
+  auto inputs = open_recordings(config, roles, options.inputs, result.notes);
+
+  std::filesystem::create_directories(options.out_dir);
+  result.trajectory = options.out_dir / "trajectory.txt";
+  result.map = options.out_dir / "map.pcd";
+  result.timing_text = options.out_dir / "timing.txt";
+  result.timing_json = options.out_dir / "timing.json";
+  result.frames_csv = options.out_dir / "frames.csv";
+  FileOutputs outputs({result.trajectory, result.frames_csv}, options.map_cell_m,
+                      options.map_max_points);
+
   // One thread reads, decodes and runs the filter; the estimator spreads residuals and map refits
   // over the pool. Its results do not depend on the pool size (estimator/task_runner.hpp), so the
   // replay stays deterministic.
-  const int threads = options_.threads >= 0 ? options_.threads : config_.estimator.threads;
-  pool_ = std::make_unique<WorkerPool>(threads > 0 ? threads : WorkerPool::hardware_threads());
-  po.runner = pool_.get();
-  pipeline_ = std::make_unique<estimator::LioPipeline>(po);
-  open_outputs();
+  const int threads = options.threads >= 0 ? options.threads : config.estimator.threads;
+  WorkerPool pool(threads > 0 ? threads : WorkerPool::hardware_threads());
+  runtime::SchedulerOptions so;
+  so.max_recording =
+      options.max_duration_s > 0.0 ? from_seconds(options.max_duration_s) : Nanoseconds(0);
+  runtime::Scheduler scheduler(config, std::move(inputs), &pool, outputs, so);
 
-  ProgressLine progress(options_.progress);
+  ProgressLine progress(options.progress);
   const auto wall_start = Clock::now();
-  double decode_s = 0.0;
-  double estimator_s = 0.0;
-  const std::int64_t max_duration_ns =
-      options_.max_duration_s > 0.0 ? from_seconds(options_.max_duration_s).count() : 0;
-
-  while (true) {
-    // k-way merge: the earliest next event; ties go to the sensor listed first.
-    ReplayedSensor* next = nullptr;
-    std::int64_t next_ns = 0;
-    for (auto& s : sensors_) {
-      const auto t = s->source->peek_time();
-      if (t && (next == nullptr || *t < next_ns)) {
-        next = s.get();
-        next_ns = *t;
+  // SIGINT / SIGTERM stop the replay cleanly: what was read is processed and written.
+  const runtime::BlockedSignals signals;
+  constexpr std::uint64_t kSignalCheckPeriod = 256;  // events between two looks
+  for (std::uint64_t n = 0; !scheduler.exhausted(); ++n) {
+    scheduler.step();
+    progress.update(progress_state(scheduler));
+    if (n % kSignalCheckPeriod == 0) {
+      if (const int sig = signals.wait(Nanoseconds(0)); sig == SIGINT || sig == SIGTERM) {
+        result.interrupted_by = sig;
+        break;
       }
     }
-    if (next == nullptr) break;
-    if (!first_event_ns_) first_event_ns_ = next_ns;
-    if (max_duration_ns > 0 && next_ns - *first_event_ns_ > max_duration_ns) break;
-    last_event_ns_ = std::max(last_event_ns_, next_ns);
-
-    const auto t0 = Clock::now();
-    next->source->deliver(next->sinks);
-    decode_s += seconds_since(t0);
-    estimator_s += process();
-    if (const auto f = next->source->fraction_done()) fraction_ = f;
-    progress.update(progress_state());
   }
-  const auto t0 = Clock::now();
-  for (auto& s : sensors_) s->source->finish(s->sinks);
-  decode_s += seconds_since(t0);
-  estimator_s += process();
+  scheduler.finish();
   const double wall_s = seconds_since(wall_start);
-  progress.finish(progress_state());
+  progress.finish(progress_state(scheduler));
 
-  trajectory_->close();
-  frames_->close();
-  write_pcd(result_.map, map_.xyz());
-  result_.summary = summarise(wall_s);
-  result_.summary.decode_s = decode_s;
-  result_.summary.estimator_s = estimator_s;
-  write_text_file(result_.timing_text, format_timing_text(result_.summary));
-  write_text_file(result_.timing_json, format_timing_json(result_.summary));
-  return std::move(result_);
-}
+  outputs.close();
+  write_pcd(result.map, outputs.map().xyz());
 
-ReplaySummary Replay::summarise(double wall_s) const {
-  ReplaySummary s;
-  s.config_file = config_.source_file.string();
-  s.frames = trajectory_->poses();
-  s.init_status = pipeline_->init_status();
-  s.counters = pipeline_->counters();
+  ReplaySummary& s = result.summary;
+  const auto& st = scheduler.stats();
+  const auto& pipeline = scheduler.pipeline();
+  s.config_file = config.source_file.string();
+  s.frames = outputs.poses();
+  s.init_status = pipeline.init_status();
+  s.counters = pipeline.counters();
   s.degenerate_frames = s.counters.degenerate_frames;
-  s.frame_ms = distribution(series_.total);
-  s.frame_cpu_ms = distribution(series_.cpu);
-  s.propagate_ms = distribution(series_.propagate);
-  s.undistort_ms = distribution(series_.undistort);
-  s.downsample_ms = distribution(series_.downsample);
-  s.residuals_ms = distribution(series_.residuals);
-  s.update_ms = distribution(series_.update);
-  s.map_ms = distribution(series_.map);
-  s.raw_points = distribution(series_.raw_points);
-  s.used_points = distribution(series_.used_points);
-  s.matched = distribution(series_.matched);
-  s.iterations = distribution(series_.iterations);
+  outputs.series().summarise(s);
   s.recording_s =
-      first_event_ns_ ? to_seconds(Nanoseconds(last_event_ns_ - *first_event_ns_)) : 0.0;
+      st.first_event_ns ? to_seconds(Nanoseconds(st.last_event_ns - *st.first_event_ns)) : 0.0;
   s.wall_s = wall_s;
-  s.output_s = output_s_;
+  s.output_s = st.output_s;
+  s.decode_s = st.decode_s;
+  s.estimator_s = st.estimator_s;
   s.realtime_factor = wall_s > 0.0 ? s.recording_s / wall_s : 0.0;
   s.peak_rss_bytes = peak_rss_bytes();
   s.final_rss_bytes = current_rss_bytes();
-  s.map = pipeline_->map().stats();
-  s.map_bytes_peak = std::max(map_bytes_peak_, s.map.bytes);
-  s.exported_points = map_.size();
-  s.exported_dropped = map_.dropped_full();
-  for (const auto& r : sensors_) {
+  s.map = pipeline.map().stats();
+  s.map_bytes_peak = std::max(outputs.map_bytes_peak(), s.map.bytes);
+  s.exported_points = outputs.map().size();
+  s.exported_dropped = outputs.map().dropped_full();
+  s.exported_outside = outputs.map().dropped_outside();
+  s.exported_grid_half_extent_m = outputs.map().grid_half_extent_m();
+  s.exported_budget = options.map_max_points;
+  for (const auto& r : scheduler.sensors()) {
     SensorSummary sensor;
     sensor.name = r->config->name;
     sensor.role = r->role;
-    sensor.file = r->file;
+    sensor.file = r->origin;
     sensor.counters = r->source->summary();
     sensor.scans = r->scans;
     sensor.imu_samples = r->imu_samples;
     sensor.clock = clock_summary(*r->clock);
     s.sensors.push_back(std::move(sensor));
   }
-  return s;
-}
+  write_text_file(result.timing_text, format_timing_text(s));
+  write_text_file(result.timing_json, format_timing_json(s));
+  for (const auto& r : scheduler.sensors()) {
+    result.losses.merge(r->source->input_losses());
+    for (auto& note : r->source->notes()) result.notes.push_back(std::move(note));
+  }
 
-}  // namespace
-
-ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options) {
-  Replay replay(config, options);
-  return replay.run();
+  // The configuration's outputs, honoured as `livod run` honours them: copies of OUTDIR's files.
+  const auto copy_to = [&](const std::filesystem::path& from, const std::filesystem::path& to) {
+    if (to.empty()) return;
+    std::error_code ec;
+    if (to.has_parent_path()) std::filesystem::create_directories(to.parent_path(), ec);
+    std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, ec);
+    if (ec)
+      throw Error("cannot write " + to.string() +
+                  " (outputs in the configuration): " + ec.message());
+    result.configured_outputs.push_back(to);
+  };
+  copy_to(result.trajectory, config.outputs.trajectory);
+  copy_to(result.map, config.outputs.map_pcd);
+  copy_to(result.timing_text, config.outputs.timing_report);
+  return result;
 }
 
 }  // namespace livod::daemon::replay

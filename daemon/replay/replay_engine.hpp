@@ -1,17 +1,16 @@
 #pragma once
 // Offline replay, as fast as possible and deterministic (the same recordings and configuration
-// give byte-identical trajectories): one thread reads, decodes and runs the filter; the estimator
-// spreads its residuals and map refits over a worker pool without changing a bit of the result.
+// give byte-identical trajectories): the runtime's scheduler loop (daemon/runtime/scheduler.hpp)
+// driven by one thread over recorded sources until they are exhausted, writing its outputs
+// synchronously; the estimator spreads its residuals and map refits over a worker pool without
+// changing a bit of the result.
 //
-//   recordings ──(one ReplaySource per sensor: pcap / candump / bag topic)──▶ k-way merge on the
-//   recording's receive time (ties: configuration order) ──▶ the sensor's decoder ──▶ its
-//   ClockDomain (+ time_offset_s) ──▶ LioPipeline ──▶ trajectory, map, timing report
+//   recordings ──(one source per sensor: pcap / candump / bag topic)──▶ runtime::Scheduler (merge
+//   on the recording's receive time, decoders, clock domains, LioPipeline) ──▶ FileOutputs ──▶
+//   trajectory, map, timing report
 //
-// The estimator takes the body IMU (body_frame) and one LiDAR: the body IMU's own LiDAR when the
-// body is an internal IMU ("<lidar>.imu"), else the first enabled LiDAR. T_imu_lidar is that
-// LiDAR's T_body_sensor (the body IMU defines the body frame). Other sensors are not replayed
-// (the result's notes say so). The LiDAR's internal IMU, when enabled, feeds its clock domain even
-// when it is not the body IMU.
+// Which sensors the estimator takes: runtime::assign_roles. Other sensors are not replayed (the
+// result's notes say so).
 //
 // Outputs in ReplayOptions::out_dir (created): trajectory.txt (TUM, mapped measurement time,
 // body frame in the estimator's world = the IMU frame at initialisation), map.pcd (binary PCD,
@@ -25,6 +24,7 @@
 
 #include "daemon/config/config.hpp"
 #include "daemon/replay/timing_report.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon::replay {
 
@@ -42,18 +42,26 @@ struct ReplayOptions {
 
 struct ReplayResult {
   ReplaySummary summary;
-  std::vector<std::string> notes;  // sensors not used and why
+  std::vector<std::string> notes;  // sensors not used and why, recordings read with repairs
+  io::InputLossLog losses;         // what the sources could not read of their recordings
   std::filesystem::path trajectory;
   std::filesystem::path map;
   std::filesystem::path timing_text;
   std::filesystem::path timing_json;
   std::filesystem::path frames_csv;
+  // The configuration's outputs.trajectory / map_pcd / timing_report, when set: copies of the
+  // files above.
+  std::vector<std::filesystem::path> configured_outputs;
+  // SIGINT or SIGTERM stopped the replay early (0: it ran to the end). The outputs are complete
+  // for what was replayed until then.
+  int interrupted_by = 0;
 };
 
-// Replays the configuration's recordings. The configuration must have loaded without errors.
-// Throws livod::Error when the configuration cannot be replayed (no body IMU or LiDAR recording,
-// an unsupported driver/format pair, unreadable files) and livod::FormatError for corrupt
-// recordings.
+// Replays the configuration's recordings. SIGINT and SIGTERM are taken by the replay (blocked in
+// the calling thread while it runs): they stop it early, with complete outputs. The configuration
+// must have loaded without errors. Throws livod::Error when the configuration cannot be replayed
+// (no body IMU or LiDAR recording, an unsupported driver/format pair, unreadable files) and
+// livod::FormatError for corrupt recordings.
 ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options);
 
 }  // namespace livod::daemon::replay

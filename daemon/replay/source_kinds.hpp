@@ -10,6 +10,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/replay/sources.hpp"
 #include "drivers/lidar_decoder.hpp"
+#include "drivers/ouster/metadata.hpp"
 
 namespace livod::daemon::replay {
 
@@ -26,6 +27,12 @@ std::unique_ptr<ReplaySource> make_candump_source(const std::filesystem::path& f
 // One topic of a ROS1 bag. The message type decides: sensor_msgs/Imu -> IMU samples;
 // sensor_msgs/PointCloud2, livox_ros_driver/CustomMsg -> scans; ouster_ros/PacketMsg -> the
 // packet decoder (`decoder` must then be given).
+// The Ouster metadata an ouster_ros bag carries: the std_msgs/String topic "metadata" beside the
+// packet topic (/os_node/lidar_packets -> /os_node/metadata), else the bag's only String topic
+// named "*metadata". Throws livod::Error naming the bag when it has none or it does not parse.
+drivers::ouster::SensorMetadata bag_ouster_metadata(const std::filesystem::path& file,
+                                                    const std::string& packet_topic);
+
 std::unique_ptr<ReplaySource> make_bag_source(const std::filesystem::path& file,
                                               const std::string& topic, const SensorConfig& sensor,
                                               std::unique_ptr<drivers::LidarDecoder> decoder);

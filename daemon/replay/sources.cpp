@@ -20,10 +20,16 @@ std::unique_ptr<ReplaySource> make_source(const SensorConfig& sensor,
       case ReplayFormat::candump:
         if (sensor.driver != Driver::can_imu) break;
         return make_candump_source(replay.file, sensor.can, sensor.name);
-      case ReplayFormat::rosbag1:
-        return make_bag_source(
-            replay.file, replay.topic, sensor,
-            is_packet_lidar(sensor.driver) ? make_lidar_decoder(sensor) : nullptr);
+      case ReplayFormat::rosbag1: {
+        std::unique_ptr<drivers::LidarDecoder> decoder;
+        if (sensor.driver == Driver::ouster && sensor.metadata.empty()) {
+          // ouster_ros bags record the metadata on a topic of their own.
+          decoder = make_ouster_decoder(sensor, bag_ouster_metadata(replay.file, replay.topic));
+        } else if (is_packet_lidar(sensor.driver)) {
+          decoder = make_lidar_decoder(sensor);
+        }
+        return make_bag_source(replay.file, replay.topic, sensor, std::move(decoder));
+      }
       case ReplayFormat::euroc:
         break;
     }

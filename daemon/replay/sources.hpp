@@ -15,25 +15,14 @@
 #include <vector>
 
 #include "daemon/config/config.hpp"
+#include "daemon/runtime/source.hpp"
 #include "drivers/lidar_decoder.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::daemon::replay {
 
-class ReplaySource {
- public:
-  virtual ~ReplaySource() = default;
-  // Receive time (ns, the recording's host clock) of the next event; nullopt at the end. Reads at
-  // most one event ahead. Throws livod::FormatError on a corrupt file.
-  virtual std::optional<std::int64_t> peek_time() = 0;
-  // Decodes the event announced by peek_time() into `sinks` (a packet may complete nothing).
-  virtual void deliver(const drivers::DecoderSinks& sinks) = 0;
-  // End of the recording: emits what the decoder still holds (the last, partial scan).
-  virtual void finish(const drivers::DecoderSinks& sinks) = 0;
-  // Counters for the report, one line ("packets 123, scans 10, decode errors 0, ...").
-  [[nodiscard]] virtual std::string summary() const = 0;
-  // Fraction of the recording consumed when the source can tell (bags), for the progress line.
-  [[nodiscard]] virtual std::optional<double> fraction_done() const { return std::nullopt; }
-};
+// Recorded streams implement the runtime's source interface (daemon/runtime/source.hpp).
+using ReplaySource = runtime::MeasurementSource;
 
 // The source for one sensor's recording. `ports`: the UDP destination ports to keep from a pcap
 // (empty: the decoder's defaults). Throws livod::Error naming the sensor when the recording

@@ -225,18 +225,18 @@ std::size_t current_rss_bytes() {
   return static_cast<std::size_t>(resident_pages) * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
 }
 
-FrameTable::FrameTable(const std::filesystem::path& path) : path_(path), out_(path) {
-  if (!out_) throw Error("cannot create " + path.string());
-  out_ << "frame,t,raw_points,used_points,matched,iterations,converged,updated,degenerate,"
-          "translation_ratio,propagate_ms,undistort_ms,downsample_ms,residuals_ms,update_ms,map_ms,"
-          "total_ms,"
-          "cpu_ms,map_planes,map_bytes,exported_points,rss_bytes\n";
+FrameTable::FrameTable(const std::filesystem::path& path) : file_(path) {
+  file_.stream()
+      << "frame,t,raw_points,used_points,matched,iterations,converged,updated,degenerate,"
+         "translation_ratio,propagate_ms,undistort_ms,downsample_ms,residuals_ms,update_ms,map_ms,"
+         "total_ms,"
+         "cpu_ms,map_planes,map_bytes,exported_points,rss_bytes\n";
 }
 
 void FrameTable::add(std::size_t frame, const estimator::FrameReport& r, double cpu_ms,
                      std::size_t exported_points, std::size_t rss_bytes) {
   const auto& t = r.timings;
-  out_ << fmt::format(
+  file_.stream() << fmt::format(
       "{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{}"
       ","
       "{},{},{}\n",
@@ -248,9 +248,7 @@ void FrameTable::add(std::size_t frame, const estimator::FrameReport& r, double 
 }
 
 void FrameTable::close() {
-  out_.flush();
-  if (!out_) throw Error("cannot write " + path_.string());
-  out_.close();
+  file_.commit();
 }
 
 }  // namespace livod::daemon::replay

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "estimator/pipeline.hpp"
+#include "io/output_file.hpp"
 
 namespace livod::daemon::replay {
 
@@ -75,6 +76,9 @@ struct ReplaySummary {
   std::size_t map_bytes_peak = 0;
   std::size_t exported_points = 0;
   std::uint64_t exported_dropped = 0;  // points in new cells after the budget was spent
+  std::uint64_t exported_outside = 0;  // points beyond the map.pcd cell grid (not mapped)
+  double exported_grid_half_extent_m = 0.0;
+  std::size_t exported_budget = 0;
   std::vector<SensorSummary> sensors;
 };
 
@@ -97,8 +101,7 @@ class FrameTable {
   void close();
 
  private:
-  std::filesystem::path path_;
-  std::ofstream out_;
+  io::OutputFile file_;  // NAME.partial until close()
 };
 
 }  // namespace livod::daemon::replay

@@ -2,8 +2,6 @@
 
 #include <fmt/core.h>
 
-#include "core/error.hpp"
-
 namespace livod::daemon::replay {
 
 std::string format_seconds(std::int64_t ns) {
@@ -16,9 +14,7 @@ std::string format_seconds(std::int64_t ns) {
                      magnitude % kNsPerSecond);
 }
 
-TrajectoryWriter::TrajectoryWriter(const std::filesystem::path& path) : path_(path), out_(path) {
-  if (!out_) throw Error("cannot create " + path.string());
-}
+TrajectoryWriter::TrajectoryWriter(const std::filesystem::path& path) : file_(path) {}
 
 void TrajectoryWriter::write(MappedTime t, const Eigen::Matrix3d& R_world_body,
                              const Eigen::Vector3d& p_world_body) {
@@ -26,16 +22,14 @@ void TrajectoryWriter::write(MappedTime t, const Eigen::Matrix3d& R_world_body,
   q.normalize();
   // TUM leaves the quaternion sign free; a fixed convention (w >= 0) keeps files comparable.
   if (q.w() < 0.0) q.coeffs() = -q.coeffs();
-  out_ << fmt::format("{} {:.9f} {:.9f} {:.9f} {:.9f} {:.9f} {:.9f} {:.9f}\n", format_seconds(t.ns),
-                      p_world_body.x(), p_world_body.y(), p_world_body.z(), q.x(), q.y(), q.z(),
-                      q.w());
+  file_.stream() << fmt::format("{} {:.9f} {:.9f} {:.9f} {:.9f} {:.9f} {:.9f} {:.9f}\n",
+                                format_seconds(t.ns), p_world_body.x(), p_world_body.y(),
+                                p_world_body.z(), q.x(), q.y(), q.z(), q.w());
   ++poses_;
 }
 
 void TrajectoryWriter::close() {
-  out_.flush();
-  if (!out_) throw Error("cannot write " + path_.string());
-  out_.close();
+  file_.commit();
 }
 
 }  // namespace livod::daemon::replay

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 #include <string>
@@ -85,15 +87,81 @@ TEST(DecodeCommand, PcdAndUsageErrors) {
                  livod::test::data_path("velodyne/nebula_vlp16/VLP16.yaml").string(), "-o",
                  (dir / "c.csv").string()}),
             1);  // a 16-laser calibration for a 32-laser sensor
-  // Only the position port: no data packets, no scans, still a valid (empty) file.
+  // Only the position port: no data packets, no scans: a failure (issue 14), with a valid (empty)
+  // file all the same.
   ASSERT_EQ(run({capture, "--model", "VLP-16", "--port", "8308", "-o", (dir / "d.csv").string()}),
-            0);
+            1);
   std::ifstream empty(dir / "d.csv");
   std::string header;
   std::string extra;
   std::getline(empty, header);
   EXPECT_EQ(header, "frame,x,y,z,intensity,t_ns,ring,return");
   EXPECT_FALSE(std::getline(empty, extra));
+}
+
+}  // namespace
+}  // namespace livod::daemon
+
+// Issue 14: a decode that yields nothing, or that lost part of its capture, is not a success.
+namespace livod::daemon {
+namespace {
+
+const std::string kOusterCapture = "ouster/pcaps/OS-1-128_v2.3.0_1024x10_lb_n3.pcap";
+const std::string kOusterMetadata = "ouster/pcaps/OS-1-128_v2.3.0_1024x10.json";
+
+int decode_ouster(const std::string& model, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args = {livod::test::data_path(kOusterCapture).string(),
+                                   "--model",
+                                   model,
+                                   "--metadata",
+                                   livod::test::data_path(kOusterMetadata).string(),
+                                   "-o",
+                                   (livod::test::temp_dir("decode_ouster") / "os.csv").string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return run(args);
+}
+
+TEST(DecodeCommand, OusterProductNamesAreAcceptedAndCheckedAgainstTheMetadata) {
+  EXPECT_EQ(decode_ouster("OS1-128"), 0);
+  EXPECT_EQ(decode_ouster("OS-1-128"), 0);
+  EXPECT_EQ(decode_ouster("OS"), 0);
+  EXPECT_EQ(decode_ouster("OS1-16"), 1);
+  EXPECT_EQ(decode_ouster("OS0-128"), 1);
+}
+
+TEST(DecodeCommand, NothingDecodedIsAFailure) {
+  EXPECT_EQ(decode_ouster("OS1-128", {"--port", "9999"}), 1);  // wrong port
+  const auto out = livod::test::temp_dir("decode_wrong_model") / "x.csv";
+  EXPECT_EQ(run({livod::test::data_path(kOusterCapture).string(), "--model", "VLP-16", "-o",
+                 out.string()}),
+            1);  // wrong model
+  // Wrong metadata: another sensor's (32 beams, another packet size) gives only decode errors.
+  EXPECT_EQ(run({livod::test::data_path(kOusterCapture).string(), "--model", "OS", "--metadata",
+                 livod::test::data_path("ouster/pcaps/OS-1-32-G_v2.1.1_1024x10.json").string(),
+                 "-o", out.string()}),
+            1);
+}
+
+TEST(DecodeCommand, LostInputFailsUnlessAccepted) {
+  const auto dir = livod::test::temp_dir("decode_damaged");
+  std::ifstream in(livod::test::data_path(kCapture), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Record 30's capture length becomes 0xFFFFFFFF (records follow the 24-byte file header).
+  std::size_t at = 24;
+  for (int i = 0; i < 30; ++i) {
+    std::uint32_t caplen = 0;
+    std::memcpy(&caplen, bytes.data() + at + 8, 4);
+    at += 16 + caplen;
+  }
+  std::memset(bytes.data() + at + 8, 0xFF, 4);
+  const auto damaged = dir / "damaged.pcap";
+  std::ofstream(damaged, std::ios::binary) << bytes;
+  const std::vector<std::string> base = {damaged.string(), "--model", "VLP-16", "-o",
+                                         (dir / "out.csv").string()};
+  EXPECT_EQ(run(base), 3);
+  auto accepted = base;
+  accepted.push_back("--accept-partial-input");
+  EXPECT_EQ(run(accepted), 0);
 }
 
 }  // namespace

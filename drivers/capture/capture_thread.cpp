@@ -90,10 +90,12 @@ void CaptureThread::run(const std::stop_token& stop) {
   std::int64_t last_rx_ns = 0;
   while (!stop.stop_requested()) {
     const auto batch = socket_.receive_batch(config_.poll_timeout_ms);
+    const std::uint64_t pushed_before = pushed;
     for (const io::ReceivedDatagram& d : batch) {
       if (ring_.try_push(d.payload, d.rx, reported_port_, d.truncated)) ++pushed;
       last_rx_ns = d.rx.ns;
     }
+    if (pushed != pushed_before && config_.doorbell != nullptr) config_.doorbell->ring();
     ++wakeups;
     // One publication per batch (relaxed: the counters carry no data; the ring publishes the
     // packets itself).

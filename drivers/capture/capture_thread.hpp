@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "core/spsc_ring.hpp"
+#include "drivers/capture/doorbell.hpp"
 #include "drivers/capture/packet_ring.hpp"
 #include "io/udp_socket.hpp"
 
@@ -30,6 +31,9 @@ struct CaptureThreadConfig {
   // dst_port handed downstream with each packet; 0 = the socket's bound port. A source bound to an
   // ephemeral port (tests, port remapping) reports the sensor's nominal port here.
   std::uint16_t reported_port = 0;
+  // Rung after each batch that pushed packets, to wake the consumer (the daemon's scheduler)
+  // when it sleeps on empty rings; nullptr = the consumer polls. Must outlive the thread.
+  Doorbell* doorbell = nullptr;
 };
 
 // Outcome of a scheduling request made by the capture thread for itself.

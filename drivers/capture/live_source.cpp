@@ -19,7 +19,6 @@ UdpStream::~UdpStream() {
 
 LiveSource::LiveSource(const LiveSourceConfig& config, std::unique_ptr<LidarDecoder> decoder)
     : name_(config.name) {
-  if (!decoder) throw std::invalid_argument("LiveSource '" + name_ + "': no decoder");
   if (config.streams.empty()) throw std::invalid_argument("LiveSource '" + name_ + "': no streams");
   std::vector<PacketRing*> rings;
   // If a later socket fails to open, the streams already built are destroyed (and joined) by

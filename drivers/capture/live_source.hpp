@@ -23,9 +23,9 @@
 #include "core/time.hpp"
 #include "drivers/capture/capture_thread.hpp"
 #include "drivers/capture/health.hpp"
-#include "drivers/lidar_decoder.hpp"
 #include "drivers/capture/packet_ring.hpp"
 #include "drivers/capture/stream_consumer.hpp"
+#include "drivers/lidar_decoder.hpp"
 #include "io/udp_socket.hpp"
 
 namespace livod::drivers {
@@ -74,7 +74,8 @@ struct LiveSourceConfig {
 class LiveSource {
  public:
   // Throws livod::Error if a socket cannot be opened (streams opened so far are stopped again) and
-  // std::invalid_argument for a null decoder or no streams.
+  // std::invalid_argument for no streams. A null decoder is allowed: packets are counted and
+  // dropped until consumer().replace_decoder() installs one (an Ouster without metadata yet).
   LiveSource(const LiveSourceConfig& config, std::unique_ptr<LidarDecoder> decoder);
   ~LiveSource();
   LiveSource(const LiveSource&) = delete;

@@ -44,8 +44,15 @@ PaceResult pace(const std::filesystem::path& capture, const PaceOptions& options
       continue;
     }
     if (!first_record_ns) {
-      first_record_ns = d->capture_time_ns;
-      start = std::chrono::steady_clock::now();
+      if (options.epoch_record_ns && options.epoch) {
+        first_record_ns = *options.epoch_record_ns;
+        start = std::chrono::steady_clock::time_point(
+            std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                Nanoseconds(options.epoch->ns)));
+      } else {
+        first_record_ns = d->capture_time_ns;
+        start = std::chrono::steady_clock::now();
+      }
     }
     const std::int64_t offset_ns = d->capture_time_ns - *first_record_ns;
     result.recorded_span = std::max(result.recorded_span, Nanoseconds(offset_ns));
@@ -64,7 +71,14 @@ PaceResult pace(const std::filesystem::path& capture, const PaceOptions& options
     } else {
       ++result.failed;
     }
+    if (options.progress != nullptr) {
+      options.progress->delivered.store(result.delivered, std::memory_order_relaxed);
+      options.progress->failed.store(result.failed, std::memory_order_relaxed);
+      options.progress->last_delivery_ns.store(host_now().ns, std::memory_order_relaxed);
+    }
   }
+  result.losses = reader.losses();
+  if (options.progress != nullptr) options.progress->done.store(true, std::memory_order_release);
   return result;
 }
 
@@ -100,8 +114,10 @@ PaceResult push_pcap_paced(const std::filesystem::path& capture, std::span<const
     }
     return std::nullopt;
   };
-  const auto deliver = [](PacketRing* ring, const io::UdpDatagram& d) {
-    return ring->try_push(d.payload, host_now(), d.dst_port);
+  const auto deliver = [&options](PacketRing* ring, const io::UdpDatagram& d) {
+    const bool ok = ring->try_push(d.payload, host_now(), d.dst_port);
+    if (ok && options.doorbell != nullptr) options.doorbell->ring();
+    return ok;
   };
   return pace(capture, options, stop, route, deliver);
 }

@@ -8,21 +8,40 @@
 // and start the moment the first datagram is released; a pacer that falls behind sends at once
 // (and reports its largest lateness). Sleeping uses CLOCK_MONOTONIC (std::chrono::steady_clock).
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <stop_token>
 #include <string>
 
 #include "core/time.hpp"
+#include "drivers/capture/doorbell.hpp"
 #include "drivers/capture/packet_ring.hpp"
+#include "io/input_loss.hpp"
 
 namespace livod::drivers {
+
+// Written by the pacer as it goes (any thread may read): health of a paced recording.
+struct PaceProgress {
+  std::atomic<std::uint64_t> delivered{0};
+  std::atomic<std::uint64_t> failed{0};
+  std::atomic<std::int64_t> last_delivery_ns{0};  // CLOCK_MONOTONIC of the latest delivery
+  std::atomic<bool> done{false};                  // the capture is exhausted (or stopped)
+};
 
 struct PaceOptions {
   double speed = 1.0;  // 1 = recorded pace, 2 = twice as fast; must be > 0
   // send_pcap_paced only: the sending socket's address (loopback keeps tests off the network).
   std::string bind_address = "127.0.0.1";
+  // One schedule for several pacers (replay --realtime paces every recording against one clock):
+  // record time `epoch_record_ns` is due at `epoch` (CLOCK_MONOTONIC). Unset: the first routed
+  // datagram is due when it is read.
+  std::optional<std::int64_t> epoch_record_ns;
+  std::optional<HostTime> epoch;
+  PaceProgress* progress = nullptr;  // optional; must outlive the call
+  Doorbell* doorbell = nullptr;      // push_pcap_paced: rung after each push (may be null)
 };
 
 struct PaceResult {
@@ -33,6 +52,7 @@ struct PaceResult {
   Nanoseconds max_lateness{0};   // worst delay behind the schedule
   Nanoseconds recorded_span{0};  // last minus first record time
   bool stopped = false;          // the stop token fired before the end
+  io::InputLossLog losses;       // damaged stretches of the capture its reader skipped
 };
 
 // pcap destination port -> where the live source listens.

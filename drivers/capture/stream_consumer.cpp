@@ -22,7 +22,6 @@ DecoderCounters sum(const DecoderCounters& a, const DecoderCounters& b) {
 StreamConsumer::StreamConsumer(std::unique_ptr<LidarDecoder> decoder,
                                std::vector<PacketRing*> rings)
     : decoder_(std::move(decoder)), rings_(std::move(rings)) {
-  if (!decoder_) throw std::invalid_argument("StreamConsumer: no decoder");
   for (const PacketRing* ring : rings_) {
     if (ring == nullptr) throw std::invalid_argument("StreamConsumer: null ring");
   }
@@ -46,6 +45,8 @@ std::size_t StreamConsumer::poll(const DecoderSinks& sinks, std::size_t max_pack
     if (oldest->truncated) {
       // A cut datagram would only be a decode error with a misleading cause; count it here.
       ++counters_.truncated_skipped;
+    } else if (!decoder_) {
+      ++counters_.without_decoder;
     } else {
       decoder_->on_packet(PacketView{oldest->payload, oldest->rx.ns, oldest->dst_port}, sinks);
     }
@@ -57,15 +58,24 @@ std::size_t StreamConsumer::poll(const DecoderSinks& sinks, std::size_t max_pack
   return done;
 }
 
+std::optional<HostTime> StreamConsumer::next_rx() {
+  std::optional<HostTime> oldest;
+  for (PacketRing* ring : rings_) {
+    const RawPacket* p = ring->front();
+    if (p != nullptr && (!oldest || p->rx < *oldest)) oldest = p->rx;
+  }
+  return oldest;
+}
+
 void StreamConsumer::replace_decoder(std::unique_ptr<LidarDecoder> decoder) {
   if (!decoder) throw std::invalid_argument("StreamConsumer: no decoder");
-  retired_ = sum(retired_, decoder_->counters());
+  if (decoder_) retired_ = sum(retired_, decoder_->counters());
   decoder_ = std::move(decoder);
   ++counters_.decoder_replacements;
 }
 
 DecoderCounters StreamConsumer::decoder_counters() const {
-  return sum(retired_, decoder_->counters());
+  return decoder_ ? sum(retired_, decoder_->counters()) : retired_;
 }
 
 }  // namespace livod::drivers

@@ -13,29 +13,41 @@
 #include <vector>
 
 #include "core/time.hpp"
-#include "drivers/lidar_decoder.hpp"
 #include "drivers/capture/packet_ring.hpp"
+#include "drivers/lidar_decoder.hpp"
 
 namespace livod::drivers {
 
 struct ConsumerCounters {
   std::uint64_t packets = 0;            // popped from the rings and decoded
   std::uint64_t truncated_skipped = 0;  // popped but not decoded: cut by the slot size
+  // Popped but not decoded: no decoder yet (an Ouster whose metadata is still being fetched).
+  std::uint64_t without_decoder = 0;
   std::uint64_t decoder_replacements = 0;
 };
 
 class StreamConsumer {
  public:
-  // `rings` must outlive the consumer. Throws std::invalid_argument for a null decoder or ring.
+  // `rings` must outlive the consumer. Throws std::invalid_argument for a null ring. A null
+  // decoder is allowed: packets are then popped and counted (without_decoder) until
+  // replace_decoder() installs one, so that the rings never fill while a decoder is pending.
   StreamConsumer(std::unique_ptr<LidarDecoder> decoder, std::vector<PacketRing*> rings);
 
   // Decodes up to `max_packets` queued packets; scans and IMU samples go to `sinks`. Returns the
   // number of packets popped (0: every ring was empty).
   std::size_t poll(const DecoderSinks& sinks, std::size_t max_packets = SIZE_MAX);
 
-  // Emits the scan under construction (end of stream).
-  void flush(const DecoderSinks& sinks) { decoder_->flush(sinks); }
+  // Receive time of the oldest queued packet over the sensor's rings (what poll() pops next);
+  // nullopt when every ring is empty.
+  [[nodiscard]] std::optional<HostTime> next_rx();
 
+  // Emits the scan under construction (end of stream).
+  void flush(const DecoderSinks& sinks) {
+    if (decoder_) decoder_->flush(sinks);
+  }
+
+  [[nodiscard]] bool has_decoder() const { return decoder_ != nullptr; }
+  // Precondition: has_decoder().
   [[nodiscard]] LidarDecoder& decoder() { return *decoder_; }
   [[nodiscard]] const LidarDecoder& decoder() const { return *decoder_; }
 

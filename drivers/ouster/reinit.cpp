@@ -96,9 +96,11 @@ void OusterReinitHandler::ask(HostTime now) {
 }
 
 void OusterReinitHandler::maintain(StreamConsumer& consumer, HostTime now) {
-  auto* decoder = dynamic_cast<ouster::OusterDecoder*>(&consumer.decoder());
-  if (decoder == nullptr) return;
-  current_reinits_ = decoder->ouster_counters().init_id_changes;
+  // No decoder yet (no metadata file; the sensor was unreachable at start): fetch until it answers.
+  auto* decoder =
+      consumer.has_decoder() ? dynamic_cast<ouster::OusterDecoder*>(&consumer.decoder()) : nullptr;
+  if (consumer.has_decoder() && decoder == nullptr) return;
+  if (decoder != nullptr) current_reinits_ = decoder->ouster_counters().init_id_changes;
 
   if (auto metadata = fetcher_.take()) {
     try {
@@ -114,7 +116,7 @@ void OusterReinitHandler::maintain(StreamConsumer& consumer, HostTime now) {
       last_error_ = std::string("metadata refresh: ") + e.what();
     }
   }
-  if (decoder->metadata_init_id_mismatch() || recovered_) ask(now);
+  if (decoder == nullptr || decoder->metadata_init_id_mismatch() || recovered_) ask(now);
   const OusterFetchCounters fetches = fetcher_.counters();
   if (fetches.failures != seen_failures_) {
     seen_failures_ = fetches.failures;

@@ -23,9 +23,9 @@
 
 #include "core/time.hpp"
 #include "drivers/capture/health.hpp"
+#include "drivers/capture/stream_consumer.hpp"
 #include "drivers/ouster/metadata.hpp"
 #include "drivers/ouster/ouster_decoder.hpp"
-#include "drivers/capture/stream_consumer.hpp"
 
 namespace livod::drivers {
 
@@ -81,8 +81,9 @@ class OusterReinitHandler {
                       Nanoseconds retry_interval = Nanoseconds(2'000'000'000));
 
   // Consumer thread, after StreamConsumer::poll(): asks for metadata when the consumer's
-  // OusterDecoder reports a re-initialised sensor, and installs a new decoder once it arrives.
-  // Does nothing if the consumer's decoder is not an OusterDecoder.
+  // OusterDecoder reports a re-initialised sensor, or when the consumer has no decoder yet (the
+  // daemon started without a metadata file and the sensor has not answered), and installs a new
+  // decoder once it arrives. Does nothing if the consumer's decoder is not an OusterDecoder.
   void maintain(StreamConsumer& consumer, HostTime now);
 
   // Consumer thread, with the source's latest health: a stream that recovered from STALE asks for

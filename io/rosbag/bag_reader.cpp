@@ -144,6 +144,15 @@ struct BagReader::Impl {
   std::vector<ChunkRecord> chunks;
   std::uint64_t first_record_pos = 0;  // after the bag header record
   bool recovered = false;
+  std::string index_problem;  // why the index was rebuilt (recovered bags)
+  InputLossLog losses;        // damaged stretches skipped while rebuilding the index
+
+  // The message of a FormatError without the leading "<source>: " (losses name the file).
+  std::string reason_of(const std::exception& e) const {
+    std::string text = e.what();
+    if (text.rfind(source + ": ", 0) == 0) text.erase(0, source.size() + 2);
+    return text;
+  }
 
   [[noreturn]] void fail(std::uint64_t offset, const std::string& message) const {
     throw FormatError(source, offset, message);
@@ -298,14 +307,15 @@ struct BagReader::Impl {
   void load_index(const BagHeader& h) {
     if (h.index_pos == 0) {
       fail(kBagMagic.size(),
-           "bag has no index (index_pos 0: recording not closed); reindex it or "
-           "open with Options::recover");
+           "bag has no index (index_pos 0: the recording was not closed); it must be "
+           "reindexed (rosbag reindex, or read with recovery: livod replay does)");
     }
     // index_pos == size is a bag without connections and chunks.
     if (h.index_pos < first_record_pos || h.index_pos > src->size()) {
       fail(kBagMagic.size(), "index_pos " + std::to_string(h.index_pos) + " is outside the file (" +
                                  std::to_string(src->size()) +
-                                 " bytes): truncated bag; open with Options::recover");
+                                 " bytes): the bag is truncated; it must be reindexed (rosbag "
+                                 "reindex, or read with recovery: livod replay does)");
     }
     const std::uint64_t remaining = src->size() - h.index_pos;
     if ((static_cast<std::uint64_t>(h.conn_count) + h.chunk_count) * kMinRecordSize > remaining) {
@@ -360,8 +370,9 @@ struct BagReader::Impl {
     }
   }
 
-  // Rebuilds connections and per-chunk indexes from the chunks themselves, stopping at the first
-  // record that is damaged or runs past the end of the file.
+  // Rebuilds connections and per-chunk indexes from the chunks themselves, as `rosbag reindex`
+  // does. A damaged record does not end the scan: the next chunk or connection record is searched
+  // for (find_record) and the stretch in between is kept as an InputLoss.
   void scan_chunks() {
     connections.clear();
     conn_index_by_id.clear();
@@ -369,6 +380,21 @@ struct BagReader::Impl {
     recovered = true;
     std::uint64_t pos = first_record_pos;
     std::vector<std::byte> data;
+    std::optional<std::int64_t> last_end_ns;
+    // A damaged stretch stays open until a chunk reads again: the records found inside it
+    // (connection and message records of a damaged uncompressed chunk) extend it rather than
+    // counting as stretches of their own.
+    InputLoss open;
+    bool is_open = false;
+    const auto close = [&](std::optional<std::int64_t> resume_ns) {
+      if (!is_open) return;
+      if (resume_ns && last_end_ns && *resume_ns >= *last_end_ns) {
+        open.seconds = static_cast<double>(*resume_ns - *last_end_ns) * 1e-9;
+      }
+      losses.add(std::move(open));
+      open = InputLoss{};
+      is_open = false;
+    };
     while (pos < src->size()) {
       try {
         const FileRecord r = read_record(pos);
@@ -377,17 +403,86 @@ struct BagReader::Impl {
           const ChunkHeader c = chunk_header(r);
           load_chunk_data(r, c, data);
           ChunkRecord chunk = scan_chunk(r.position, data);
-          if (!chunk.scanned.empty()) chunks.push_back(std::move(chunk));
+          if (!chunk.scanned.empty()) {
+            close(chunk.start_ns);
+            last_end_ns = chunk.end_ns;
+            chunks.push_back(std::move(chunk));
+          }
         } else if (op == static_cast<std::uint8_t>(BagOp::kConnection)) {
           add_connection(parse_connection(r.header, read_data(r), pos, r.data_pos), pos);
         } else if (op != static_cast<std::uint8_t>(BagOp::kIndexData) &&
                    op != static_cast<std::uint8_t>(BagOp::kChunkInfo)) {
-          break;
+          fail(pos, "unexpected record (op " + std::to_string(op) + ") in the chunk section");
         }
         pos = r.end();
-      } catch (const FormatError&) {
-        break;  // damaged from here on: what was read so far is the recovered bag
+      } catch (const FormatError& e) {
+        const std::optional<std::uint64_t> resume = find_record(pos + 1);
+        const std::uint64_t end = resume ? *resume : src->size();
+        if (!is_open) {
+          is_open = true;
+          open.file = source;
+          open.byte_offset = pos;
+          open.unit = "messages";
+          open.reason = reason_of(e);
+        }
+        open.bytes = end - open.byte_offset.value_or(pos);
+        if (!resume) {
+          open.reason += " (the file ends in the damage)";
+          break;
+        }
+        pos = *resume;
       }
+    }
+    close(std::nullopt);
+  }
+
+  // The first offset >= `from` where a chunk or connection record starts (its header parses,
+  // its data fits the file and a chunk's compression and sizes are valid), or nullopt. Records
+  // are found by their op field ("\x04\0\0\0op=\x05" or "...\x07") and the header length before
+  // it; rosbag writes at most two short fields before op.
+  std::optional<std::uint64_t> find_record(std::uint64_t from) const {
+    constexpr std::size_t kWindow = 1 << 16;
+    constexpr std::size_t kPattern = 8;
+    constexpr std::uint64_t kMaxFieldsBeforeOp = 512;
+    const std::byte pattern[7] = {std::byte{4},   std::byte{0},   std::byte{0},  std::byte{0},
+                                  std::byte{'o'}, std::byte{'p'}, std::byte{'='}};
+    std::uint64_t pos = from;
+    std::vector<std::byte> window;
+    while (pos + kPattern <= src->size()) {
+      const std::size_t n =
+          static_cast<std::size_t>(std::min<std::uint64_t>(kWindow, src->size() - pos));
+      window.resize(n);
+      src->read_at(pos, window);
+      for (std::size_t i = 0; i + kPattern <= n; ++i) {
+        if (std::memcmp(window.data() + i, pattern, sizeof pattern) != 0) continue;
+        const auto op = std::to_integer<std::uint8_t>(window[i + 7]);
+        if (op != static_cast<std::uint8_t>(BagOp::kChunk) &&
+            op != static_cast<std::uint8_t>(BagOp::kConnection)) {
+          continue;
+        }
+        const std::uint64_t field = pos + i;
+        // The record starts at least 4 bytes (its header length) before the field.
+        for (std::uint64_t back = 4; back <= kMaxFieldsBeforeOp + 4 && back <= field; ++back) {
+          const std::uint64_t start = field - back;
+          if (start < from) break;
+          if (record_starts_at(start, field)) return start;
+        }
+      }
+      if (n <= kPattern) break;
+      pos += n - kPattern + 1;
+    }
+    return std::nullopt;
+  }
+
+  bool record_starts_at(std::uint64_t start, std::uint64_t op_field) const {
+    try {
+      const std::uint32_t header_len = read_u32(start, "record header length");
+      if (op_field + 8 > start + 4 + std::uint64_t{header_len}) return false;
+      const FileRecord r = read_record(start);
+      if (r.header.op() == static_cast<std::uint8_t>(BagOp::kChunk)) (void)chunk_header(r);
+      return true;
+    } catch (const FormatError&) {
+      return false;
     }
   }
 
@@ -446,8 +541,9 @@ struct BagReader::Impl {
     const BagHeader h = read_bag_header();
     try {
       load_index(h);
-    } catch (const FormatError&) {
+    } catch (const FormatError& e) {
       if (!options.recover) throw;
+      index_problem = reason_of(e);
       scan_chunks();
     }
   }
@@ -476,6 +572,7 @@ struct ChunkSlot {
   ChunkHeader header;
   std::vector<std::byte> data;  // decompressed records (compressed chunks, while needed)
   bool data_loaded = false;
+  bool damaged = false;  // recovering: the chunk was found damaged and its messages counted lost
   std::uint32_t pending = 0;
 };
 
@@ -490,6 +587,38 @@ struct MessageCursor::State {
   std::priority_queue<Pending, std::vector<Pending>, std::greater<>> heap;
   std::optional<std::uint32_t> last_slot;
   std::vector<std::byte> record;  // message record read from an uncompressed chunk
+  InputLossLog losses;            // recovering: damaged chunks and messages skipped
+
+  // Recovering reads skip a damaged chunk or message and keep it as a loss; strict ones throw.
+  void lose(std::uint64_t offset, std::uint64_t messages, std::optional<double> seconds,
+            const FormatError& e) {
+    if (!bag->options.recover) throw e;
+    InputLoss loss;
+    loss.file = bag->source;
+    loss.byte_offset = offset;
+    loss.records = messages;
+    loss.unit = "messages";
+    loss.seconds = seconds;
+    loss.reason = bag->reason_of(e);
+    losses.add(std::move(loss));
+  }
+
+  void load_slot(std::uint32_t slot_index) {
+    try {
+      load_slot_index(slot_index);
+    } catch (const FormatError& e) {
+      // Nothing of the chunk is pushed; the index tells how many wanted messages it held.
+      ChunkSlot& slot = slots[slot_index];
+      slot.damaged = true;
+      std::uint64_t messages = 0;
+      for (const auto& [conn, n] : slot.chunk->counts) {
+        if (wanted[conn]) messages += n;
+      }
+      slot.pending = 0;  // entries pushed before the damage was found are dropped when popped
+      lose(slot.chunk->position, messages,
+           static_cast<double>(slot.chunk->end_ns - slot.chunk->start_ns) * 1e-9, e);
+    }
+  }
 
   [[nodiscard]] bool in_range(std::int64_t t) const {
     return t >= query.start_ns && t <= query.end_ns;
@@ -646,17 +775,36 @@ struct MessageCursor::State {
     }
     // Chunks are visited by start time: any message earlier than (or tied with) the heap top
     // lives in a chunk that starts no later than it, so load those before popping.
-    while (next_slot < slots.size() &&
-           (heap.empty() || slots[next_slot].chunk->start_ns <= heap.top().time_ns)) {
-      load_slot_index(static_cast<std::uint32_t>(next_slot++));
+    while (true) {
+      while (next_slot < slots.size() &&
+             (heap.empty() || slots[next_slot].chunk->start_ns <= heap.top().time_ns)) {
+        load_slot(static_cast<std::uint32_t>(next_slot++));
+      }
+      if (heap.empty()) return std::nullopt;
+      const Pending p = heap.top();
+      heap.pop();
+      ChunkSlot& slot = slots[p.slot];
+      if (slot.damaged) continue;  // counted in the chunk's loss
+      try {
+        BagMessage m = read_message(p);
+        --slot.pending;
+        last_slot = p.slot;
+        return m;
+      } catch (const FormatError& e) {
+        if (slot.header.compression != Compression::kNone && !slot.data_loaded) {
+          // The chunk does not decompress: every message still due from it is lost.
+          slot.damaged = true;
+          lose(slot.chunk->position, slot.pending, std::nullopt, e);
+          slot.pending = 0;
+        } else {
+          --slot.pending;
+          lose(slot.header.compression == Compression::kNone ? slot.header.data_pos + p.offset
+                                                             : slot.chunk->position,
+               1, std::nullopt, e);
+          last_slot = p.slot;
+        }
+      }
     }
-    if (heap.empty()) return std::nullopt;
-    const Pending p = heap.top();
-    heap.pop();
-    BagMessage m = read_message(p);
-    --slots[p.slot].pending;
-    last_slot = p.slot;
-    return m;
   }
 };
 
@@ -667,6 +815,10 @@ MessageCursor& MessageCursor::operator=(MessageCursor&&) noexcept = default;
 
 std::optional<BagMessage> MessageCursor::next() {
   return state_->next();
+}
+
+const InputLossLog& MessageCursor::losses() const {
+  return state_->losses;
 }
 
 // ---- BagMessage ------------------------------------------------------------------------------
@@ -723,6 +875,12 @@ std::size_t BagReader::chunk_count() const {
 }
 bool BagReader::recovered() const {
   return impl_->recovered;
+}
+const std::string& BagReader::index_problem() const {
+  return impl_->index_problem;
+}
+const InputLossLog& BagReader::losses() const {
+  return impl_->losses;
 }
 
 std::vector<TopicInfo> BagReader::topics() const {

@@ -7,10 +7,13 @@
 // For uncompressed chunks only the wanted message records are read.
 //
 // Corrupt or truncated input throws livod::FormatError with the file offset. Every length is
-// checked against the file (or the decompressed chunk) before anything is allocated for it. A bag
-// whose index is missing or broken (recording killed, file truncated) throws unless
-// Options::recover is set: then the chunks are scanned from the start and every message up to the
-// first damaged chunk is readable (a clean partial read).
+// checked against the file (or the decompressed chunk) before anything is allocated for it.
+// With Options::recover the reader reads past damage instead and keeps what it skipped as
+// InputLosses: a bag whose index is missing or broken (recording killed, file truncated) gets its
+// index rebuilt by scanning the chunks, as `rosbag reindex` does, and a damaged record is passed
+// by searching for the next chunk or connection record (BagReader::losses()); with an intact
+// index, a chunk that does not read loses its messages (counted from the index) and a message
+// record that does not read loses itself (MessageCursor::losses()).
 //
 //   BagReader bag("run.bag");
 //   BagQuery q;
@@ -33,6 +36,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "io/input_loss.hpp"
 #include "io/rosbag/ros_messages.hpp"
 
 namespace livod::io::rosbag {
@@ -92,7 +96,7 @@ class BagReader {
     // Largest uncompressed chunk accepted (rosbag writes 768 KiB chunks; a single huge message
     // gets a chunk of its own).
     std::size_t max_chunk_bytes = std::size_t{1} << 30;
-    // Rebuild the index by scanning the chunks when it is missing or broken.
+    // Read past damage (see above) instead of throwing at the first damaged record.
     bool recover = false;
   };
 
@@ -119,8 +123,11 @@ class BagReader {
   // Earliest / latest message time; nullopt for a bag without messages.
   [[nodiscard]] std::optional<std::int64_t> start_time_ns() const;
   [[nodiscard]] std::optional<std::int64_t> end_time_ns() const;
-  // True when the index was rebuilt by scanning (Options::recover on a damaged bag).
+  // True when the index was rebuilt by scanning (Options::recover on a damaged bag), and why.
   [[nodiscard]] bool recovered() const;
+  [[nodiscard]] const std::string& index_problem() const;
+  // Stretches skipped while rebuilding the index (empty unless recovered()).
+  [[nodiscard]] const InputLossLog& losses() const;
   // Number of chunks per compression name, e.g. {"bz2": 10}. Reads every chunk header.
   [[nodiscard]] std::map<std::string, std::size_t> chunk_compressions() const;
 
@@ -146,6 +153,8 @@ class MessageCursor {
   // The next message, or nullopt when the query is exhausted. Throws livod::FormatError on a
   // corrupt chunk, index entry or message record.
   std::optional<BagMessage> next();
+  // Recovering readers: the chunks and message records this cursor skipped as damaged.
+  [[nodiscard]] const InputLossLog& losses() const;
 
   struct State;
 

@@ -115,6 +115,9 @@ void extract_points(const sensor_msgs::PointCloud2& cloud, const CloudFields& fi
                           " points of row_step " + std::to_string(cloud.row_step));
   }
   out.resize(static_cast<std::size_t>(cloud.height) * cloud.width);
+  // A cloud without points returns here: walking the rows of a width-0 cloud would cost up to
+  // 2^32 iterations for nothing (a hostile height stalled a replay for seconds per message).
+  if (empty) return;
   std::size_t k = 0;
   for (std::uint32_t row = 0; row < cloud.height; ++row) {
     for (std::uint32_t col = 0; col < cloud.width; ++col) {

@@ -215,6 +215,24 @@ TEST(Candump, LenientModeSkipsAndCounts) {
   EXPECT_EQ(reader.stats().lines, 7u);
   EXPECT_NE(reader.first_skipped_error().find("line 2"), std::string::npos)
       << reader.first_skipped_error();
+  // The two consecutive bad lines are one loss, spanning the second between their neighbours.
+  ASSERT_EQ(reader.losses().count(), 1u);
+  const InputLoss& loss = reader.losses().entries()[0];
+  EXPECT_EQ(loss.file, "mixed.log");
+  EXPECT_EQ(loss.byte_offset, 23u);
+  EXPECT_EQ(loss.bytes, 13u + 5001u);
+  EXPECT_EQ(loss.records, 2u);
+  EXPECT_EQ(loss.unit, "lines");
+  ASSERT_TRUE(loss.seconds.has_value());
+  EXPECT_DOUBLE_EQ(*loss.seconds, 1.0);
+  EXPECT_NE(loss.reason.find("line 2"), std::string::npos) << loss.reason;
+
+  // A bad last line is a loss that ends the file.
+  auto tail =
+      CandumpReader::from_memory("(1.000000) can0 123#00\n(2.0000", "tail.log", {.lenient = true});
+  read_all(tail);
+  ASSERT_EQ(tail.losses().count(), 1u);
+  EXPECT_FALSE(tail.losses().entries()[0].seconds.has_value());
 
   // Strict mode throws on an over-long line.
   const std::string strict_text = "(1.000000) can0 123#00\n" + std::string(5000, 'x') + "\n";

@@ -376,7 +376,7 @@ TEST(LcmLog, FileAndMemoryReadersAgree) {
 int run_interop_script(const std::filesystem::path& input, const std::filesystem::path& output,
                        const std::filesystem::path& log) {
   const std::string script =
-      (std::filesystem::path(__FILE__).parent_path() / "lcm_interop.sh").string();
+      (livod::test::source_dir() / "io" / "tests" / "lcm_interop.sh").string();
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);

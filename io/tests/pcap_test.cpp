@@ -1178,3 +1178,123 @@ TEST(Ipv4Reassembler, TimeoutEvictionAndFlushBoundMemory) {
 
 }  // namespace
 }  // namespace livod::io
+
+// ---------------------------------------------------------------------------------------------
+// Reading past damage (issue 14): the reader resumes after a corrupt record and says what it lost.
+
+namespace livod::io {
+namespace {
+
+std::vector<Seen> without_indices(std::vector<Seen> seen) {
+  for (auto& s : seen) s.record_index = 0;
+  return seen;
+}
+
+void put_le32(Bytes& b, std::size_t at, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) b[at + i] = static_cast<std::byte>((v >> (8 * i)) & 0xFF);
+}
+
+TEST(PcapDamage, ReadsPastACorruptCaptureLengthAndReportsTheLoss) {
+  const fs::path capture = test::data_path("velodyne/veloview/vlp-16-test-90deg-1-50-frames.pcap");
+  Bytes bytes = read_file(capture);
+  const RawPcap parsed = parse_pcap(bytes);
+  ASSERT_GT(parsed.records.size(), 1100u);
+  std::vector<Seen> expected = without_indices(read_all(capture));
+  ASSERT_EQ(expected.size(), parsed.records.size());
+  const std::size_t damaged = 1000;
+  expected.erase(expected.begin() + static_cast<std::ptrdiff_t>(damaged));
+  const RawRecord& record = parsed.records[damaged];
+  put_le32(bytes, record.file_offset + 8, 0xFFFFFFFF);  // the capture length of the issue
+
+  PcapReader reader = PcapReader::from_memory(bytes, "damaged.pcap");
+  EXPECT_EQ(without_indices(read_all(reader)), expected);
+  EXPECT_TRUE(reader.end_error().empty()) << reader.end_error();
+  ASSERT_EQ(reader.losses().count(), 1u);
+  const InputLoss& loss = reader.losses().entries()[0];
+  EXPECT_EQ(loss.file, "damaged.pcap");
+  EXPECT_EQ(loss.byte_offset, record.file_offset);
+  EXPECT_EQ(loss.bytes, 16 + record.data.size());
+  EXPECT_EQ(loss.records, 1u);
+  EXPECT_TRUE(loss.records_estimated);
+  ASSERT_TRUE(loss.seconds.has_value());
+  const auto time_of = [&](std::size_t i) {
+    return static_cast<double>(parsed.records[i].seconds) +
+           1e-6 * static_cast<double>(parsed.records[i].fraction);
+  };
+  EXPECT_NEAR(*loss.seconds, time_of(damaged + 1) - time_of(damaged - 1), 2e-6);
+  const std::string text = format_loss(loss);
+  EXPECT_NE(text.find("damaged.pcap: at byte offset " + std::to_string(record.file_offset)),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(reader.stats().malformed, 1u);
+}
+
+TEST(PcapDamage, ReadsPastGarbageBetweenRecords) {
+  const fs::path capture = test::data_path("velodyne/veloview/vlp-16-test-90deg-1-50-frames.pcap");
+  Bytes bytes = read_file(capture);
+  const RawPcap parsed = parse_pcap(bytes);
+  const std::vector<Seen> expected = without_indices(read_all(capture));
+  std::mt19937 rng(14);
+  Bytes garbage(5000);
+  for (auto& b : garbage) b = static_cast<std::byte>(rng() & 0xFF);
+  const std::size_t at = parsed.records[500].file_offset;
+  bytes.insert(bytes.begin() + static_cast<std::ptrdiff_t>(at), garbage.begin(), garbage.end());
+
+  PcapReader reader = PcapReader::from_memory(bytes, "garbage.pcap");
+  EXPECT_EQ(without_indices(read_all(reader)), expected);
+  ASSERT_EQ(reader.losses().count(), 1u);
+  EXPECT_EQ(reader.losses().entries()[0].byte_offset, at);
+  EXPECT_EQ(reader.losses().entries()[0].bytes, garbage.size());
+}
+
+TEST(PcapDamage, ReadsPastABrokenPcapngBlock) {
+  const RawPcap parsed =
+      parse_pcap(read_file(test::data_path("velodyne/nebula_vlp16/velodyne_vlp16.pcap")));
+  Bytes ng = serialize_pcapng(parsed);
+  PcapReader intact = PcapReader::from_memory(ng, "intact.pcapng");
+  std::vector<Seen> expected = without_indices(read_all(intact));
+  ASSERT_GT(expected.size(), 100u);
+  // Walk the blocks to the 50th enhanced packet block and break its total length.
+  std::size_t at = 0;
+  std::size_t epb = 0;
+  while (true) {
+    const std::uint32_t type = get_le32(ng, at);
+    const std::uint32_t length = get_le32(ng, at + 4);
+    if (type == 6 && epb++ == 50) break;
+    at += length;
+  }
+  const std::uint32_t length = get_le32(ng, at + 4);
+  put_le32(ng, at + 4, 0x00FFFF00);
+  expected.erase(expected.begin() + 50);
+
+  PcapReader reader = PcapReader::from_memory(ng, "broken.pcapng");
+  EXPECT_EQ(without_indices(read_all(reader)), expected);
+  ASSERT_EQ(reader.losses().count(), 1u);
+  EXPECT_EQ(reader.losses().entries()[0].byte_offset, at);
+  EXPECT_EQ(reader.losses().entries()[0].bytes, length);
+}
+
+TEST(PcapDamage, TruncationIsALossToTheEndOfTheFile) {
+  const Bytes original = read_file(test::data_path("ouster/pcaps/same_ports.pcap"));
+  const RawPcap parsed = parse_pcap(original);
+  const std::size_t cut = parsed.records[20].file_offset + 16 + 100;
+  PcapReader reader = PcapReader::from_memory(
+      Bytes(original.begin(), original.begin() + static_cast<std::ptrdiff_t>(cut)), "cut.pcap");
+  read_all(reader);
+  ASSERT_EQ(reader.losses().count(), 1u);
+  const InputLoss& loss = reader.losses().entries()[0];
+  EXPECT_EQ(loss.byte_offset, parsed.records[20].file_offset);
+  EXPECT_EQ(loss.bytes, 116u);
+  EXPECT_FALSE(loss.seconds.has_value());
+  EXPECT_NE(loss.reason.find("the file ends in the damage"), std::string::npos) << loss.reason;
+  EXPECT_FALSE(reader.end_error().empty());
+}
+
+TEST(PcapDamage, IntactCapturesReportNoLoss) {
+  PcapReader reader(test::data_path("velodyne/nebula_vlp16/velodyne_vlp16.pcap"));
+  read_all(reader);
+  EXPECT_TRUE(reader.losses().empty());
+}
+
+}  // namespace
+}  // namespace livod::io

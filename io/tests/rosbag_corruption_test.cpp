@@ -263,3 +263,107 @@ TEST(RosbagCorruption, RandomByteDamageNeverCrashes) {
 
 }  // namespace
 }  // namespace livod::io::rosbag
+
+// ---------------------------------------------------------------------------------------------
+// Reading past damage (issue 14): the recovering reader skips what is damaged and says so.
+
+namespace livod::io::rosbag {
+namespace {
+
+BagReader::Options recovering() {
+  BagReader::Options options;
+  options.recover = true;
+  return options;
+}
+
+std::uint32_t u32_at(const std::vector<std::byte>& b, std::size_t at) {
+  std::uint32_t v = 0;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+
+// File offsets of the chunk records of a bag written by make_bag (chunk, then its index records).
+std::vector<std::size_t> chunk_offsets(const std::vector<std::byte>& b) {
+  std::vector<std::size_t> out;
+  std::size_t at = 4117;  // magic + bag header record
+  while (at + 8 < b.size()) {
+    const std::size_t header_len = u32_at(b, at);
+    const std::string_view header(reinterpret_cast<const char*>(b.data()) + at + 4, header_len);
+    const std::size_t data_len = u32_at(b, at + 4 + header_len);
+    if (header.find(std::string("op=\x05", 4)) != std::string_view::npos) out.push_back(at);
+    if (header.find(std::string("op=\x06", 4)) != std::string_view::npos) break;  // index section
+    at += 8 + header_len + data_len;
+  }
+  return out;
+}
+
+TEST(RosbagDamage, TruncatedBagIsReindexedAndTheCutChunkIsALoss) {
+  const auto dir = test::temp_dir("rosbag_damage_truncated");
+  const auto whole = file_bytes(make_bag(dir, Compression::kLz4));
+  const auto chunks = chunk_offsets(whole);
+  ASSERT_GT(chunks.size(), 5u);
+  const std::size_t cut = chunks[4] + 100;  // inside the fifth chunk
+  const auto bag = BagReader::from_bytes(
+      {whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(cut)}, "cut.bag", recovering());
+  EXPECT_TRUE(bag.recovered());
+  EXPECT_NE(bag.index_problem().find("truncated"), std::string::npos) << bag.index_problem();
+  EXPECT_EQ(bag.index_problem().find("Options::"), std::string::npos) << bag.index_problem();
+  EXPECT_EQ(bag.chunk_count(), 4u);
+  ASSERT_EQ(bag.losses().count(), 1u);
+  const InputLoss& loss = bag.losses().entries()[0];
+  EXPECT_EQ(loss.file, "cut.bag");
+  EXPECT_EQ(loss.byte_offset, chunks[4]);
+  EXPECT_EQ(loss.bytes, 100u);
+  EXPECT_NE(loss.reason.find("the file ends in the damage"), std::string::npos) << loss.reason;
+}
+
+TEST(RosbagDamage, ReindexReadsPastADamagedChunk) {
+  const auto dir = test::temp_dir("rosbag_damage_middle");
+  auto b = file_bytes(make_bag(dir, Compression::kLz4));
+  const auto full = read_all(BagReader::from_bytes(b, "intact", {}));
+  const auto chunks = chunk_offsets(b);
+  ASSERT_GT(chunks.size(), 6u);
+  // No index (as while recording) and the third chunk's record header overwritten.
+  const std::string_view text(reinterpret_cast<const char*>(b.data()), 200);
+  std::memset(b.data() + text.find("index_pos=") + 10, 0, 8);
+  std::memset(b.data() + chunks[2], 0xEE, 40);
+  const auto bag = BagReader::from_bytes(b, "damaged.bag", recovering());
+  EXPECT_TRUE(bag.recovered());
+  EXPECT_EQ(bag.chunk_count(), chunks.size() - 1);
+  ASSERT_EQ(bag.losses().count(), 1u);
+  const InputLoss& loss = bag.losses().entries()[0];
+  EXPECT_EQ(loss.byte_offset, chunks[2]);
+  EXPECT_EQ(loss.bytes, chunks[3] - chunks[2]);
+  ASSERT_TRUE(loss.seconds.has_value());
+  EXPECT_GT(*loss.seconds, 0.0);
+  const auto got = read_all(bag);
+  EXPECT_LT(got.size(), full.size());
+  EXPECT_GT(got.size(), full.size() * 3 / 4);
+  EXPECT_EQ(got.back(), full.back());  // the chunks after the damage are read
+}
+
+TEST(RosbagDamage, IndexedBagSkipsADamagedChunkAndCountsItsMessages) {
+  const auto dir = test::temp_dir("rosbag_damage_indexed");
+  auto b = file_bytes(make_bag(dir, Compression::kLz4));
+  const auto full = read_all(BagReader::from_bytes(b, "intact", {}));
+  const auto chunks = chunk_offsets(b);
+  // Corrupt the compressed data of the second chunk (its header stays valid).
+  const std::size_t header_len = u32_at(b, chunks[1]);
+  const std::size_t data_at = chunks[1] + 8 + header_len;
+  std::memset(b.data() + data_at, 0xAB, 64);
+  const auto bag = BagReader::from_bytes(b, "indexed.bag", recovering());
+  EXPECT_FALSE(bag.recovered());
+  auto cursor = bag.read();
+  std::size_t n = 0;
+  while (cursor.next()) ++n;
+  ASSERT_EQ(cursor.losses().count(), 1u);
+  const InputLoss& loss = cursor.losses().entries()[0];
+  EXPECT_EQ(loss.byte_offset, chunks[1]);
+  EXPECT_GT(loss.records, 0u);
+  EXPECT_EQ(n + loss.records, full.size());
+  // The strict reader still throws at the damage.
+  EXPECT_THROW(read_all(BagReader::from_bytes(b, "indexed.bag", {})), FormatError);
+}
+
+}  // namespace
+}  // namespace livod::io::rosbag

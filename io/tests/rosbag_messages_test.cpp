@@ -342,5 +342,17 @@ TEST(PointCloud, RejectsMissingFieldsAndShortData) {
   EXPECT_THROW(extract_points(cloud, fields, points), FormatError);
 }
 
+// Issue 14: width 0 with a height of ~2e9 is an empty cloud; it used to cost ~3 s of row walking
+// per message (the fuzz seed fuzz/seeds/ros_messages_fuzz/pointcloud2-width0-huge-height keeps
+// it, and scripts/fuzz.sh fails on slow units).
+TEST(PointCloud, ZeroWidthWithAHugeHeightIsEmpty) {
+  auto cloud = make_cloud();
+  cloud.width = 0;
+  cloud.height = 2'000'000'000;
+  std::vector<CloudPoint> points(3);
+  extract_points(cloud, CloudFields{}, points);
+  EXPECT_TRUE(points.empty());
+}
+
 }  // namespace
 }  // namespace livod::io::rosbag

@@ -7,6 +7,15 @@
 
 namespace livod::test {
 
+std::filesystem::path source_dir() {
+  // ctest passes it in the environment (like LIVOD_DATA_DIR); the compiled-in default serves a
+  // test binary run by hand.
+  if (const char* env = std::getenv("LIVOD_SOURCE_DIR"); env != nullptr && *env != '\0') {
+    return env;
+  }
+  return LIVOD_SOURCE_DIR;
+}
+
 std::filesystem::path data_dir() {
   if (const char* env = std::getenv("LIVOD_DATA_DIR"); env != nullptr && *env != '\0') {
     return env;

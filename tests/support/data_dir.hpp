@@ -9,6 +9,10 @@ namespace livod::test {
 
 std::filesystem::path data_dir();
 
+// The repository's root (the CMake source directory of the build): for tests that read the
+// repository's own files (example configurations, scripts).
+std::filesystem::path source_dir();
+
 // data_dir() / relative; fails the current test (GTEST_SKIP is not used: missing data is an error).
 std::filesystem::path data_path(const std::string& relative);
 

@@ -2,13 +2,18 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <numbers>
+#include <string>
 
 #include "core/error.hpp"
 #include "core/so3.hpp"
 
 namespace livod::eval {
 namespace {
+
+constexpr std::size_t kMinAlignmentPairs = 3;
+constexpr std::size_t kFewAlignmentPairs = 10;
 
 std::string stats_line(std::string_view label, const ErrorStatistics& s, std::string_view unit,
                        const std::string& what) {
@@ -23,14 +28,44 @@ std::string delta_text(const EvalOptions& o) {
   return fmt::format("delta {:g} {}", o.rpe_delta, to_string(o.rpe_unit));
 }
 
+// Drops poses whose stamp repeats the previous one (keeps the first): a pose written twice would
+// count twice in ATE and make zero-length RPE pairs that pull the RPE statistics down.
+Trajectory without_repeated_stamps(const Trajectory& t, std::size_t& dropped) {
+  dropped = 0;
+  if (t.stamps_s.size() != t.poses.size()) return t;  // KITTI without times: no stamps
+  std::vector<std::size_t> keep;
+  keep.reserve(t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (i > 0 && t.stamps_s[i] == t.stamps_s[i - 1]) {
+      ++dropped;
+    } else {
+      keep.push_back(i);
+    }
+  }
+  return dropped == 0 ? t : t.subset(keep);
+}
+
 }  // namespace
 
-EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptions& options) {
-  if (gt.empty()) throw Error("the ground truth has no poses");
-  if (est.empty()) throw Error("the estimate has no poses");
+EvalResult evaluate(const Trajectory& gt_read, const Trajectory& est_read,
+                    const EvalOptions& options) {
+  if (gt_read.empty()) throw Error("the ground truth has no poses");
+  if (est_read.empty()) throw Error("the estimate has no poses");
   EvalResult r;
-  r.gt_poses_read = gt.size();
-  r.est_poses_read = est.size();
+  r.gt_poses_read = gt_read.size();
+  r.est_poses_read = est_read.size();
+  std::size_t gt_repeats = 0;
+  std::size_t est_repeats = 0;
+  const Trajectory gt = without_repeated_stamps(gt_read, gt_repeats);
+  const Trajectory est = without_repeated_stamps(est_read, est_repeats);
+  for (const auto& [name, n] : {std::pair{"ground truth", gt_repeats}, {"estimate", est_repeats}}) {
+    if (n > 0) {
+      r.warnings.push_back(fmt::format(
+          "the {} repeats the timestamp of the previous pose {} time(s): those poses were "
+          "dropped (the first of each stamp kept)",
+          name, n));
+    }
+  }
 
   // KITTI pairs pose i with pose i even with a times file: both files index the same frames.
   const bool by_time = options.format != TrajectoryFormat::kKitti;
@@ -41,6 +76,18 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   r.gt = gt.subset(a.gt_index);
   const Trajectory est_assoc = est.subset(a.est_index);
 
+  // An alignment needs three non-collinear positions to fix a rotation; fewer pairs would give an
+  // arbitrary one and an ATE near zero.
+  if (options.alignment != Alignment::kNone && r.gt.size() < kMinAlignmentPairs) {
+    throw Error("only " + std::to_string(r.gt.size()) + " associated pose pair(s): " +
+                std::string(to_string(options.alignment)) + " alignment needs at least " +
+                std::to_string(kMinAlignmentPairs) + " (or --align none)");
+  }
+  if (options.alignment != Alignment::kNone && r.gt.size() < kFewAlignmentPairs) {
+    r.warnings.push_back(
+        fmt::format("the {} alignment rests on only {} pose pairs: it is poorly determined",
+                    to_string(options.alignment), r.gt.size()));
+  }
   r.alignment = align(r.gt, est_assoc, options.alignment);
   r.est_aligned = transformed(est_assoc, r.alignment);
 
@@ -55,6 +102,10 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
     r.rpe_translation = compute_statistics(r.rpe.translation_m);
     r.rpe_rotation = compute_statistics(r.rpe.rotation_deg);
   }
+  const bool finite = std::isfinite(r.ape.rmse) && std::isfinite(r.alignment.scale) &&
+                      (!r.rpe_translation || (std::isfinite(r.rpe_translation->rmse) &&
+                                              std::isfinite(r.rpe_rotation->rmse)));
+  if (!finite) throw Error("the errors are not finite numbers: check the trajectories' values");
   return r;
 }
 
@@ -81,6 +132,7 @@ EvalResult evaluate_files(const std::filesystem::path& est_path,
 
 std::string format_report(const EvalResult& r, const EvalOptions& o) {
   std::string out;
+  for (const auto& w : r.warnings) out += "warning      " + w + "\n";
   out +=
       fmt::format("poses        ground truth {}, estimate {}\n", r.gt_poses_read, r.est_poses_read);
   if (r.associated_by_time) {

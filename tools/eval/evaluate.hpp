@@ -38,6 +38,8 @@ struct EvalResult {
   RelativeErrors rpe;
   std::optional<ErrorStatistics> rpe_translation;  // empty when delta yields no pair
   std::optional<ErrorStatistics> rpe_rotation;
+  // What the user must know about these numbers (repeated stamps dropped, a weak alignment).
+  std::vector<std::string> warnings;
 };
 
 // Ground truth and estimate already read. Throws livod::Error when association fails.

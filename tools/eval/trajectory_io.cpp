@@ -2,9 +2,11 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <system_error>
@@ -13,6 +15,11 @@
 
 namespace livod::eval {
 namespace {
+
+// Largest trajectory file read (256 MiB: about two million TUM poses).
+constexpr std::size_t kMaxTrajectoryBytes = std::size_t{256} << 20;
+// Largest position coordinate accepted (m).
+constexpr double kMaxCoordinateM = 1e7;
 
 struct Field {
   std::string_view text;
@@ -98,13 +105,26 @@ class LineParser {
     }
   }
 
-  // Stamps may repeat but never go backwards: association and time deltas assume order.
+  // Stamps may repeat (real ground-truth files do: TUM fr2_desk, EuRoC V1_02; evaluate() drops
+  // the repeats and says so) but never go backwards: association and time deltas assume order.
   void check_monotonic(const Line& line, const Field& field, const std::vector<double>& stamps,
                        double t) const {
     if (!stamps.empty() && t < stamps.back()) {
       std::ostringstream msg;
       msg.precision(17);
       msg << "timestamp " << t << " is earlier than the previous one (" << stamps.back() << ")";
+      fail(line, field.offset, msg.str());
+    }
+  }
+
+  // A position in metres; beyond kMaxCoordinateM it is a unit or format mistake, and squaring it
+  // in the metrics would overflow.
+  void check_position(const Line& line, const Field& field, const Eigen::Vector3d& p) const {
+    if (!(p.cwiseAbs().maxCoeff() <= kMaxCoordinateM)) {
+      std::ostringstream msg;
+      msg.precision(6);
+      msg << "position (" << p.x() << ", " << p.y() << ", " << p.z()
+          << ") is beyond 1e7 m: not a position in metres";
       fail(line, field.offset, msg.str());
     }
   }
@@ -127,13 +147,29 @@ Eigen::Matrix3d rotation_from_quaternion(const LineParser& parser, const Line& l
   return q.toRotationMatrix();
 }
 
+// Reads a trajectory text file, at most kMaxTrajectoryBytes (a device such as /dev/zero or a
+// binary file is refused after its first block instead of being read until memory runs out).
 std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot open '" + path.string() + "'");
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
+  std::string text;
+  std::array<char, 1 << 16> block{};
+  while (in) {
+    in.read(block.data(), static_cast<std::streamsize>(block.size()));
+    const auto n = static_cast<std::size_t>(in.gcount());
+    if (std::memchr(block.data(), '\0', n) != nullptr) {
+      throw Error("'" + path.string() + "' is not a text file (it contains NUL bytes near byte " +
+                  std::to_string(text.size()) + ")");
+    }
+    text.append(block.data(), n);
+    if (text.size() > kMaxTrajectoryBytes) {
+      throw Error("'" + path.string() + "' is larger than " +
+                  std::to_string(kMaxTrajectoryBytes >> 20) +
+                  " MiB: not a trajectory (stopped reading there)");
+    }
+  }
   if (in.bad()) throw Error("cannot read '" + path.string() + "'");
-  return std::move(buffer).str();
+  return text;
 }
 
 }  // namespace
@@ -169,6 +205,7 @@ Trajectory parse_tum(std::string_view text, const std::string& source) {
     for (std::size_t i = 0; i < 8; ++i) v[i] = parser.number(line, f[i]);
     parser.check_monotonic(line, f[0], traj.stamps_s, v[0]);
     traj.stamps_s.push_back(v[0]);
+    parser.check_position(line, f[1], Eigen::Vector3d(v[1], v[2], v[3]));
     traj.poses.emplace_back(rotation_from_quaternion(parser, line, f[4], v[7], v[4], v[5], v[6]),
                             Eigen::Vector3d(v[1], v[2], v[3]));
   }
@@ -188,6 +225,7 @@ Trajectory parse_kitti(std::string_view text, const std::string& source) {
       m(static_cast<Eigen::Index>(i / 4), static_cast<Eigen::Index>(i % 4)) =
           parser.number(line, f[i]);
     }
+    parser.check_position(line, f[3], m.col(3));
     traj.poses.push_back(RigidTransform3d::from_matrix(m));
   }
   return traj;
@@ -227,6 +265,7 @@ Trajectory parse_euroc_csv(std::string_view text, const std::string& source) {
     const double t = static_cast<double>(stamp_ns) * 1e-9;
     parser.check_monotonic(line, f[0], traj.stamps_s, t);
     traj.stamps_s.push_back(t);
+    parser.check_position(line, f[1], Eigen::Vector3d(v[0], v[1], v[2]));
     traj.poses.emplace_back(rotation_from_quaternion(parser, line, f[4], v[3], v[4], v[5], v[6]),
                             Eigen::Vector3d(v[0], v[1], v[2]));
   }

@@ -21,6 +21,12 @@
 namespace livod::sim {
 namespace {
 
+// Street ends: the world starts at x = -20 m (worlds.cpp) and the trajectory must stay this far
+// from its end so that a LiDAR still sees buildings ahead.
+constexpr double kStreetStartM = -20.0;
+constexpr double kStreetAheadM = 60.0;
+constexpr double kTrajectoryProbeS = 0.1;
+
 World make_world(const Scenario& s, std::uint64_t seed) {
   WorldOptions options;
   options.foliage = s.scene.foliage;
@@ -160,14 +166,30 @@ std::uint64_t sensor_seed(std::uint64_t run_seed, const std::string& stream) {
   return sub_seed(run_seed, stream);
 }
 
+double street_length_for(const Scenario& scenario, double duration_s) {
+  const Trajectory trajectory(scenario.trajectory);
+  double max_x = 0.0;
+  for (double t = 0.0; t <= duration_s + kTrajectoryProbeS; t += kTrajectoryProbeS) {
+    max_x = std::max(max_x, trajectory.at(std::min(t, duration_s)).p_world.x());
+  }
+  return std::max(scenario.street_length_m, max_x + kStreetAheadM - kStreetStartM);
+}
+
 SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
   const double duration = options.duration_s.value_or(scenario.duration_s);
-  if (!(duration > 0.0)) throw Error("simulation duration must be positive");
+  if (!(std::isfinite(duration) && duration > 0.0 && duration <= kMaxSimDurationS)) {
+    throw Error("simulation duration " + std::to_string(duration) +
+                " s: must be a number of seconds in (0, " +
+                std::to_string(static_cast<int>(kMaxSimDurationS)) + "]");
+  }
   std::filesystem::create_directories(options.out_dir);
-  const World world = make_world(scenario, options.seed);
+  Scenario sized = scenario;
+  if (sized.world == WorldKind::kStreet)
+    sized.street_length_m = street_length_for(scenario, duration);
+  const World world = make_world(sized, options.seed);
   const MovingObjects movers =
-      make_moving_objects(scenario.world, scenario.scene, options.seed, scenario.street_length_m);
+      make_moving_objects(sized.world, sized.scene, options.seed, sized.street_length_m);
   const Trajectory trajectory(scenario.trajectory);
   const double epoch = options.host_epoch_s;
   const std::int64_t epoch_host_ns = epoch_ns(epoch);
@@ -348,7 +370,10 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     }
     for (const auto& cam : scenario.cameras) {
       const auto& k = cam.params.intrinsics;
+      // The estimator has no visual update yet: the camera is written (its calibration and images
+      // are part of the sequence) but disabled, as check-config requires.
       cfg << "  - name: " << cam.name << "\n    driver: v4l2\n    model: generic\n"
+          << "    enabled: false\n"
           << "    source:\n      replay: {file: mav0/" << cam.name << "}\n"
           << "    camera: {model: "
           << (k.model == CameraIntrinsics::Model::kEquidistant ? "equidistant" : "pinhole")

@@ -19,10 +19,20 @@
 
 namespace livod::sim {
 
+// Longest simulation accepted (s): the outputs grow by about 860 MB per simulated minute with
+// the 128-beam Ouster, so an hour is already tens of gigabytes.
+constexpr double kMaxSimDurationS = 3600.0;
+
+// The street length the world needs so that the trajectory stays inside it for `duration_s`
+// (with room for the sensors' range ahead): the scenario's length, or longer.
+double street_length_for(const Scenario& scenario, double duration_s);
+
 struct SimRunOptions {
   std::filesystem::path out_dir;
   std::uint64_t seed = 1;
-  std::optional<double> duration_s;       // overrides the scenario's duration
+  // Overrides the scenario's duration; must be finite, > 0 and <= kMaxSimDurationS (run_scenario
+  // throws otherwise). Street worlds grow to hold the trajectory (street_length_for).
+  std::optional<double> duration_s;
   double host_epoch_s = 1'700'000'000.0;  // host clock (UTC) at scenario time 0
   bool write_images = true;
   bool write_bag = false;  // also sequence.bag: the folder as a ROS1 bag (tools/sim/bag_output.hpp)

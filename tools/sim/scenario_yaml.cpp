@@ -26,6 +26,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -283,7 +284,9 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
     }
   }
   if (s.name.empty()) p.add(root, "scenario.name", "required (or give a base)");
-  if (!(s.duration_s > 0.0)) p.add(root["duration_s"], "scenario.duration_s", "must be positive");
+  if (!(std::isfinite(s.duration_s) && s.duration_s > 0.0 && s.duration_s <= 3600.0)) {
+    p.add(root["duration_s"], "scenario.duration_s", "must be a number of seconds in (0, 3600]");
+  }
   bool body_found = s.can_imu && s.can_imu->name == s.body_imu;
   for (const auto& l : s.lidars) body_found = body_found || l.name == s.body_imu;
   if (!body_found) p.add(root["body_imu"], "scenario.body_imu", "must name a LiDAR or the CAN IMU");

@@ -1,5 +1,6 @@
 // Every example configuration shipped in the repository loads without errors. The only
-// acceptable warnings are replay recordings that are not part of the repository.
+// acceptable warnings are replay recordings that are not part of the repository. The planned
+// examples (docs/examples/planned/) fail, but only because a feature is not implemented yet.
 
 #include <gtest/gtest.h>
 
@@ -9,19 +10,18 @@
 
 #include "daemon/config/load_config.hpp"
 #include "daemon/config/tests/config_test_support.hpp"
+#include "tests/support/data_dir.hpp"
 
 namespace livod::daemon {
 namespace {
 
-// The repository root, found from this source file's path (daemon/config/tests/...).
 std::filesystem::path repository_root() {
-  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().parent_path();
+  return livod::test::source_dir();
 }
 
-std::vector<std::filesystem::path> example_configs() {
+std::vector<std::filesystem::path> yaml_files(const std::vector<std::filesystem::path>& folders) {
   std::vector<std::filesystem::path> files;
-  const auto root = repository_root();
-  for (const auto& folder : {root / "systemd", root / "docs" / "examples"}) {
+  for (const auto& folder : folders) {
     if (!std::filesystem::is_directory(folder)) continue;
     for (const auto& entry : std::filesystem::directory_iterator(folder)) {
       const auto ext = entry.path().extension();
@@ -34,11 +34,16 @@ std::vector<std::filesystem::path> example_configs() {
   return files;
 }
 
+std::vector<std::filesystem::path> example_configs() {
+  const auto root = repository_root();
+  return yaml_files({root / "systemd", root / "docs" / "examples"});
+}
+
 TEST(ConfigExamples, RepositoryHasExamples) {
   const auto files = example_configs();
   EXPECT_TRUE(std::filesystem::exists(repository_root() / "systemd" / "livod.example.yaml"))
       << repository_root();
-  EXPECT_GE(files.size(), 5u);
+  EXPECT_GE(files.size(), 3u);
 }
 
 TEST(ConfigExamples, EveryExampleLoadsWithoutErrors) {
@@ -53,6 +58,20 @@ TEST(ConfigExamples, EveryExampleLoadsWithoutErrors) {
     }
     EXPECT_FALSE(result.config.sensors.empty());
     EXPECT_GE(result.config.body_sensor_index, 0);
+  }
+}
+
+TEST(ConfigExamples, PlannedExamplesFailOnlyForWhatIsNotImplemented) {
+  const auto planned = yaml_files({repository_root() / "docs" / "examples" / "planned"});
+  EXPECT_GE(planned.size(), 4u);
+  for (const auto& file : planned) {
+    SCOPED_TRACE(file.string());
+    const auto result = load_config(file);
+    EXPECT_GT(result.error_count(), 0u) << "implemented now? move it to docs/examples/";
+    for (const auto& p : result.problems) {
+      if (p.severity != Severity::error) continue;
+      EXPECT_EQ(p.kind, ProblemKind::not_implemented) << format_problem(result.source, p);
+    }
   }
 }
 

@@ -171,6 +171,48 @@ TEST(ConfigProblems, InvalidValues) {
                "logging.level");
 }
 
+TEST(ConfigProblems, LcmChannels) {
+  only_problem(load(minimal_config() + "outputs: {lcm: {channels: {pose: livod_pose}}}\n"),
+               ProblemKind::invalid_value, "outputs.lcm.channels.pose");
+  only_problem(load(minimal_config() + "outputs: {lcm: {channels: {health: \"\"}}}\n"),
+               ProblemKind::invalid_value, "outputs.lcm.channels.health");
+  only_problem(load(minimal_config() + "outputs: {lcm: {channels: {pose: [A]}}}\n"),
+               ProblemKind::wrong_type, "outputs.lcm.channels.pose");
+  {
+    const auto p = only_problem(load(minimal_config() + "outputs: {lcm: {channels: {posee: X}}}\n"),
+                                ProblemKind::unknown_key, "outputs.lcm.channels.posee");
+    EXPECT_NE(p.message.find("did you mean 'pose'"), std::string::npos) << p.message;
+  }
+  only_problem(load(minimal_config() + "outputs: {lcm: {publish_bot_core_pose: maybe}}\n"),
+               ProblemKind::wrong_type, "outputs.lcm.publish_bot_core_pose");
+  {
+    // Two enabled outputs on one channel.
+    const auto p = only_problem(
+        load(minimal_config() + "outputs: {lcm: {channels: {bot_core_pose: LIVOD_POSE}}}\n"),
+        ProblemKind::inconsistent, "outputs.lcm.channels.bot_core_pose");
+    EXPECT_NE(p.message.find("pose channel"), std::string::npos) << p.message;
+  }
+  // ... unless one of them is switched off.
+  EXPECT_TRUE(load(minimal_config() +
+                   "outputs: {lcm: {channels: {cloud: LIVOD_POSE}, publish_cloud: false}}\n")
+                  .problems.empty());
+  // LCM's 63-byte limit, on the channel when it was given, else once on the suffix.
+  only_problem(
+      load(minimal_config() + "outputs: {lcm: {channels: {pose: " + std::string(64, 'P') + "}}}\n"),
+      ProblemKind::out_of_range, "outputs.lcm.channels.pose");
+  {
+    const auto p = only_problem(
+        load(minimal_config() + "outputs: {lcm: {channel_suffix: " + std::string(50, 'S') + "}}\n"),
+        ProblemKind::out_of_range, "outputs.lcm.channel_suffix");
+    EXPECT_NE(p.message.find("LIVOD_POSE_IMU"), std::string::npos) << p.message;
+  }
+  // Every bad value at once.
+  const auto all = load(minimal_config() +
+                        "outputs: {lcm: {channels: {pose: x, health: LIVOD_CLOUD, cloud: y}, "
+                        "publish_cloud: true, cloud_max_points: 5}}\n");
+  EXPECT_EQ(all.problems.size(), 3u) << dump(all);  // pose, cloud, cloud_max_points
+}
+
 TEST(ConfigProblems, DuplicateSensorNames) {
   const auto result = load(minimal_config() + R"(  - name: lidar
     driver: ouster
@@ -567,6 +609,81 @@ TEST(ConfigProblems, HostileYamlIsReportedNotThrown) {
     EXPECT_NO_THROW(result = load(input)) << input.substr(0, 60);
     EXPECT_FALSE(result.ok()) << input.substr(0, 60);
   }
+}
+
+}  // namespace
+}  // namespace livod::daemon
+
+namespace livod::daemon {
+namespace {
+
+std::vector<std::string> not_implemented(const std::string& yaml) {
+  const ConfigResult r = load_config_from_string(yaml, "test.yaml");
+  std::vector<std::string> paths;
+  for (const auto& p : r.problems) {
+    if (p.kind == ProblemKind::not_implemented) {
+      EXPECT_EQ(p.severity, Severity::error) << p.message;
+      paths.push_back(p.path);
+    }
+  }
+  return paths;
+}
+
+const char* kLidar = R"(body_frame: os1.imu
+sensors:
+  - name: os1
+    driver: ouster
+    model: OS1-64
+    source: {udp: {sensor_address: 192.168.1.10}}
+    imu: {enabled: true}
+    extrinsic: {translation: [0, 0, 0.03], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+
+// What livod cannot run is an error at check-config time, never a silent no-op at run time.
+TEST(ConfigImplemented, WhatCannotRunIsAnError) {
+  EXPECT_TRUE(not_implemented(kLidar).empty());
+
+  const std::string camera = std::string(kLidar) + R"(  - name: cam
+    driver: aravis
+    source: {device: {camera_id: ""}}
+    camera: {width: 640, height: 512, intrinsics: [500, 500, 320, 256]}
+    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  EXPECT_EQ(not_implemented(camera), std::vector<std::string>{"sensors[1].enabled"});
+  // Disabled, the camera keeps its calibration in the file and is no problem.
+  std::string disabled = camera;
+  disabled.replace(disabled.find("    driver: aravis"), 0, "    enabled: false\n");
+  EXPECT_TRUE(not_implemented(disabled).empty());
+
+  const std::string two_lidars = std::string(kLidar) + R"(  - name: vlp
+    driver: velodyne
+    model: VLP-16
+    source: {udp: {}}
+    extrinsic: {translation: [0, 0, 0.3], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  EXPECT_EQ(not_implemented(two_lidars), std::vector<std::string>{"sensors[1].enabled"});
+
+  const std::string extra_imu = std::string(kLidar) + R"(  - name: can
+    driver: can_imu
+    source: {replay: {file: imu.log}}
+    can: {decoder: sbg}
+    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  EXPECT_EQ(not_implemented(extra_imu), std::vector<std::string>{"sensors[1].enabled"});
+
+  const std::string live_can = R"(body_frame: can
+sensors:
+  - name: vlp
+    driver: velodyne
+    model: VLP-16
+    source: {udp: {}}
+    extrinsic: {translation: [0, 0, 0.3], rotation: {rpy_deg: [0, 0, 0]}}
+  - name: can
+    driver: can_imu
+    source: {device: {interface: can0}}
+    can: {decoder: sbg}
+)";
+  EXPECT_EQ(not_implemented(live_can), std::vector<std::string>{"sensors[1].source"});
 }
 
 }  // namespace

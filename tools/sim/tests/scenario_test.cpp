@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
 
 #include "core/error.hpp"
 #include "tests/support/data_dir.hpp"
+#include "tools/sim/runner.hpp"
 
 namespace livod::sim {
 namespace {
@@ -97,6 +99,35 @@ body_imu: nobody
                                                         << what;
     }
   }
+}
+
+// Issue 14: a duration beyond the street used to leave the LiDARs in empty space; the world now
+// follows the trajectory, and durations that are not a finite positive number are refused.
+TEST(Scenario, StreetGrowsWithTheDurationAndKeepsItsDefaultLength) {
+  for (const char* name : {"street_vehicle_vlp16", "street_drone_os1_64"}) {
+    const Scenario s = make_scenario(name);
+    EXPECT_EQ(street_length_for(s, s.duration_s), s.street_length_m) << name;
+    const double long_run = 300.0;
+    const double length = street_length_for(s, long_run);
+    const Trajectory traj(s.trajectory);
+    EXPECT_GT(length, s.street_length_m) << name;
+    // The street (from x = -20 m) still reaches 40 m beyond the last pose.
+    EXPECT_LE(traj.at(long_run).p_world.x(), length - 20.0 - 40.0) << name;
+  }
+}
+
+TEST(Scenario, RunRefusesDurationsThatAreNotFinitePositiveAndBounded) {
+  const Scenario s = make_scenario("street_vehicle_vlp16");
+  for (const double d :
+       {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN(), -1.0,
+        0.0, kMaxSimDurationS + 1.0}) {
+    SimRunOptions o;
+    o.out_dir = test::temp_dir("sim_bad_duration");
+    o.duration_s = d;
+    EXPECT_THROW(run_scenario(s, o), Error) << d;
+  }
+  const auto path = write("nan.yaml", "base: street_vehicle_vlp16\nduration_s: .nan\n");
+  EXPECT_THROW(load_scenario_yaml(path), Error);
 }
 
 }  // namespace

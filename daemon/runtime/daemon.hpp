@@ -1,0 +1,68 @@
+#pragma once
+// `livod run` (live sensors) and `livod replay --realtime` (recordings at their recorded pace):
+// the threads of DESIGN.md "Data flow" around the scheduler loop.
+//
+//   capture threads (one per socket; or a pacer thread per pcap) ──rings──▶ scheduler thread
+//   (sources, clock domains, estimator on the worker pool) ──records──▶ publisher thread (LCM,
+//   trajectory, map, timing, log lines); control threads (Livox supervisor, Ouster metadata);
+//   the calling thread handles signals (SIGINT/SIGTERM stop; SIGHUP is ignored: no reload).
+//
+// Stopping (a signal, the options' stop token, or the end of a paced recording): the sources stop
+// capturing, the scheduler drains their rings (bounded in time), flushes the decoders and runs the
+// queued scans, publishes a last health record; the publisher drains, writes the map and the
+// timing report and closes the trajectory.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <stop_token>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "daemon/config/config.hpp"
+#include "daemon/runtime/publisher.hpp"
+#include "io/input_loss.hpp"
+
+namespace livod::daemon::runtime {
+
+struct DaemonOptions {
+  // Recordings paced at their recorded speed instead of live sensors (replay --realtime); the
+  // inputs are taken as `livod replay` takes them (NAME=PATH or PATH).
+  bool paced_replay = false;
+  std::vector<std::string> inputs;
+  // Write trajectory.txt, map.pcd and timing.txt here instead of the configuration's outputs.
+  std::optional<std::filesystem::path> out_dir;
+  MessageBus* bus = nullptr;  // where poses and health go (LCM); null: nowhere
+  int threads = -1;           // estimator threads; < 0: estimator.threads (0 there: one per core)
+  std::size_t max_queued_scans = 4;  // the estimator's scan queue (whole scans dropped beyond)
+  bool ephemeral_ports = false;      // tests: bind ephemeral ports (see on_ready)
+  // Stops the daemon like SIGTERM (tests run it in-process).
+  std::stop_token stop;
+  // Stops it after this long (replay --realtime --max-duration); 0: never.
+  Nanoseconds max_duration{0};
+  double map_cell_m = 0.2;                 // map.pcd voxel filter cell
+  std::size_t map_max_points = 2'000'000;  // map.pcd point budget
+  // Called on the calling thread once every socket is bound and every thread runs: the bound
+  // ports per sensor ("os1.lidar" -> 40123).
+  std::function<void(const std::vector<std::pair<std::string, std::uint16_t>>&)> on_ready;
+};
+
+struct DaemonResult {
+  int exit_code = 0;
+  std::uint64_t frames = 0;
+  PublisherStats publisher;
+  std::vector<std::string> sensor_summaries;  // "name: <source summary>"
+  std::vector<std::string> errors;            // what went wrong (exit_code != 0) or was lost
+  std::string stopped_by;                     // "SIGTERM", "end of recording", ...
+  int stop_signal = 0;                        // SIGINT / SIGTERM when one stopped it
+  io::InputLossLog losses;  // paced replay: what the recordings' readers could not read
+};
+
+// Runs until stopped. The configuration must have loaded without errors. Throws livod::Error
+// before any thread starts when a sensor cannot be opened (a port in use, a live source the
+// daemon cannot run); errors after that are in the result (exit_code 1).
+DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options);
+
+}  // namespace livod::daemon::runtime

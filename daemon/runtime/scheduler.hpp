@@ -1,0 +1,153 @@
+#pragma once
+// The scheduler loop: the one loop behind `livod replay`, `livod replay --realtime` and
+// `livod run` (DESIGN.md "Runtime"). It owns the sensors' sources, their clock domains and the
+// estimator, and runs on one thread:
+//
+//   sources ──(earliest ready event first: merge on receive time, ties in configuration order)──▶
+//   the source decodes it ──▶ the sensor's clock domain (+ time_offset_s, once) ──▶ the estimator's
+//   measurement sync ──▶ LioPipeline ──▶ OutputSink (frames; IMU-rate poses)
+//
+// Replay calls step() until every source is exhausted: one thread, deterministic (the same input
+// gives the same bytes out, for any worker-pool size). The daemon's scheduler thread calls step()
+// whenever events are ready and waits otherwise; it runs at most `max_groups_per_step` estimator
+// groups per step so that the rings are drained between frames: when the estimator falls behind,
+// whole scans are dropped at the estimator's bounded scan queue (and counted), never packets.
+//
+// The estimator takes the body IMU (body_frame) and one LiDAR: the body IMU's own LiDAR when the
+// body is an internal IMU ("<lidar>.imu"), else the first enabled LiDAR. T_imu_lidar is that
+// LiDAR's T_body_sensor. The LiDAR's internal IMU, when enabled, feeds its clock domain even when
+// it is not the body IMU.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/time.hpp"
+#include "daemon/config/config.hpp"
+#include "daemon/runtime/output_sink.hpp"
+#include "daemon/runtime/sensor_clock.hpp"
+#include "daemon/runtime/source.hpp"
+#include "estimator/imu/pose_predictor.hpp"
+#include "estimator/pipeline.hpp"
+#include "estimator/task_runner.hpp"
+
+namespace livod::daemon::runtime {
+
+// Which configured sensors the estimator uses, and how.
+struct SensorRoles {
+  int body_imu = -1;  // index into config.sensors
+  int lidar = -1;     // the estimator's LiDAR
+  Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();
+  // Per sensor: why it is not used (empty when used). Disabled sensors and sensors the estimator
+  // does not take.
+  std::vector<std::string> unused_reason;
+};
+
+// Throws livod::Error when the configuration names no body IMU or has no enabled LiDAR.
+SensorRoles assign_roles(const LivodConfig& config);
+
+// A source for one configured sensor.
+struct SensorInput {
+  std::size_t sensor_index = 0;  // into config.sensors
+  std::unique_ptr<MeasurementSource> source;
+  std::string origin;  // the file, topic or address it reads, for reports
+};
+
+struct SchedulerOptions {
+  std::size_t max_groups_per_step = SIZE_MAX;  // the daemon: 1
+  std::size_t max_queued_scans = 20;           // the estimator's scan queue (oldest dropped)
+  // Replay only: stop once this much recording (receive time after the first event) has been
+  // delivered; 0 = everything.
+  Nanoseconds max_recording{0};
+};
+
+// One sensor as the scheduler runs it.
+struct ScheduledSensor {
+  const SensorConfig* config = nullptr;
+  std::size_t index = 0;
+  std::string role;  // "lidar + body imu", "lidar", "body imu"
+  std::string origin;
+  std::unique_ptr<MeasurementSource> source;
+  std::unique_ptr<SensorClockMapper> clock;
+  bool scans_to_estimator = false;
+  bool imu_to_estimator = false;
+  bool imu_usable = false;  // its IMU samples may feed the clock (an internal IMU, or an IMU)
+  drivers::DecoderSinks sinks;
+  std::uint64_t scans = 0;
+  std::uint64_t imu_samples = 0;
+  std::optional<HostTime> last_event;  // receive time of the newest delivered event
+};
+
+struct SchedulerStats {
+  double decode_s = 0.0;     // reading + decoding + clock mapping (wall)
+  double estimator_s = 0.0;  // LioPipeline::process without the outputs (wall)
+  double output_s = 0.0;     // OutputSink calls (wall)
+  std::uint64_t events = 0;
+  std::uint64_t frames = 0;
+  std::uint64_t imu_poses = 0;
+  std::optional<std::int64_t> first_event_ns;
+  std::int64_t last_event_ns = 0;
+};
+
+class Scheduler {
+ public:
+  // `inputs`: the sources of the used sensors (see assign_roles); a used sensor without a source
+  // is an error (livod::Error naming it). `runner` (may be null) and `sink` must outlive the
+  // scheduler.
+  Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
+            estimator::TaskRunner* runner, OutputSink& sink, SchedulerOptions options = {});
+  ~Scheduler();
+  Scheduler(const Scheduler&) = delete;
+  Scheduler& operator=(const Scheduler&) = delete;
+
+  // Delivers the earliest ready event of any source, then runs up to max_groups_per_step
+  // estimator groups. Returns false when there was nothing to do (no event ready, no group due).
+  bool step();
+  // Every source exhausted (recordings at their end; live sources stopped and drained).
+  [[nodiscard]] bool exhausted();
+  // Stops the live sources' threads (their rings can still be drained by step()).
+  void stop_sources();
+  // End of input: flushes the decoders' partial scans and runs every remaining group.
+  void finish();
+  // Runs every queued group the IMU data covers (used when draining at shutdown).
+  void process_all();
+
+  [[nodiscard]] const std::vector<std::unique_ptr<ScheduledSensor>>& sensors() const {
+    return sensors_;
+  }
+  [[nodiscard]] const estimator::LioPipeline& pipeline() const { return *pipeline_; }
+  [[nodiscard]] const SchedulerStats& stats() const { return stats_; }
+  [[nodiscard]] const SensorRoles& roles() const { return roles_; }
+  // The fraction of the recording replayed, when a source can tell.
+  [[nodiscard]] std::optional<double> fraction_done() const { return fraction_; }
+  // The newest filter output's time (nullopt before the first frame).
+  [[nodiscard]] std::optional<MappedTime> last_frame_time() const { return last_frame_t_; }
+  [[nodiscard]] double last_frame_ms() const { return last_frame_ms_; }
+
+ private:
+  void build_sensors(std::vector<SensorInput> inputs);
+  // Runs up to `max_groups` estimator groups, one pipeline call per group so that each frame's
+  // CPU time is its own.
+  std::size_t process(std::size_t max_groups);
+
+  const LivodConfig& config_;
+  SchedulerOptions options_;
+  OutputSink& sink_;
+  SensorRoles roles_;
+  std::vector<std::unique_ptr<ScheduledSensor>> sensors_;  // used sensors, in configuration order
+  std::unique_ptr<estimator::LioPipeline> pipeline_;
+  estimator::PosePredictor predictor_;
+  bool want_imu_poses_ = false;
+  SchedulerStats stats_;
+  std::optional<double> fraction_;
+  std::optional<MappedTime> last_frame_t_;
+  double last_frame_ms_ = 0.0;
+  std::int64_t current_rx_ns_ = 0;  // receive time of the event being delivered
+  ImuSample last_body_imu_;         // the newest body-IMU sample (mapped)
+  bool cut_ = false;                // max_recording reached
+};
+
+}  // namespace livod::daemon::runtime
