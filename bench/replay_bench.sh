@@ -7,10 +7,11 @@
 #   bench/replay_bench.sh memory [BUILD_DIR]   15 min of the Mid-360 room: RSS and map bytes over
 #                                              time (needs ~3 GB in $TMPDIR for the capture)
 #   bench/replay_bench.sh defaults [BUILD_DIR]  every simulated model with the configuration
-#                                              `livod sim` writes (no estimator section) at 10 and
-#                                              20 Hz, SEEDS (default 3) seeds each: per-frame p50 and
-#                                              p99 (wall and CPU) and ATE. BEFORE=/path/to/livod
-#                                              replays the same captures with another build too.
+#                                              `livod sim` writes (no estimator section) at each
+#                                              rate of RATES (default '10 20' Hz), SEEDS (default
+#                                              3) seeds each: per-frame p50 and p99 (wall and CPU)
+#                                              and ATE. BEFORE=/path/to/livod replays the same
+#                                              captures with another build too.
 #   bench/replay_bench.sh sweep BUILD_DIR SCENARIO SECONDS RATE 'SETTINGS'...
 #                                              one row per estimator setting (YAML flow mapping,
 #                                              '' = defaults) over SEEDS seeds: mean ATE, p99
@@ -95,7 +96,7 @@ case "$mode" in
     printf "%-8s %-24s %4s %8s %8s %8s %8s %10s  %s\n" model scenario Hz points p50 p99 \
       "p99-CPU" "ATE-mean" "(min-max, m)"
     while read -r model scenario seconds; do
-      for rate in 10 20; do
+      for rate in ${RATES:-10 20}; do
         for build in after before; do
           bin=$livod
           if [ "$build" = before ]; then
