@@ -90,17 +90,7 @@ bool ImuInitializer::add(const ImuSample& sample) {
   b.P.block<3, 3>(kVel, kVel).diagonal().setConstant(cov_.velocity);
   b.P.block<3, 3>(kBg, kBg).diagonal().setConstant(cov_.bias_gyro);
   b.P.block<3, 3>(kBa, kBa).diagonal().setConstant(cov_.bias_accel);
-  // g = -R0 f_mean |g| / |f_mean| with f_mean = -R0^T g_true + b_a: its error is R0 times the
-  // bias's part across the specific force (the part along it only changes |f_mean|, which is
-  // rescaled away), the same vector as the b_a error.
-  const Eigen::Vector3d f_hat = acc_mean / acc_mean_norm;
-  const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - f_hat * f_hat.transpose();
-  const Eigen::Matrix3d G = b.x.R_world_imu * across;  // d(g error) / d(b_a error)
-  const Eigen::Matrix3d P_ba = b.P.block<3, 3>(kBa, kBa);
-  b.P.block<3, 3>(kGrav, kGrav) =
-      G * P_ba * G.transpose() + Eigen::Matrix3d::Identity() * cov_.gravity;
-  b.P.block<3, 3>(kGrav, kBa) = G * P_ba;
-  b.P.block<3, 3>(kBa, kGrav) = (G * P_ba).transpose();
+  b.P.block<3, 3>(kGrav, kGrav).diagonal().setConstant(cov_.gravity);
   result_ = b;
   time_ = window_.back().stamp.mapped;
   std::ostringstream os;

@@ -14,18 +14,9 @@
 
 namespace livod::estimator {
 
-// The initial uncertainty. The world frame is the IMU frame at initialisation (gravity-aligned
-// with gravity_align), so pose and world are the same thing there: the initial rotation and
-// position are exact by definition and get only a numerical floor. A loose initial rotation (it was
-// 0.01 rad^2, 5.7 deg) let the first scans of a static start rotate the estimate by hundredths of a
-// degree against the first map, an attitude error every later map was built with (0.028 deg of
-// yaw and pitch, a 0.05 % heading/slope error on the street drive).
-// Gravity comes from the mean specific force, which contains the unknown accelerometer bias: the
-// initial gravity error is the bias's horizontal part, so the gravity and b_a errors start fully
-// correlated (initializer.cpp) instead of gravity being "known" to 1e-5.
 struct InitialCovariance {
-  double rotation = 1e-10;
-  double position = 1e-10;
+  double rotation = 0.01;
+  double position = 0.01;
   double inv_exposure = 1e-5;
   double velocity = 0.01;
   double bias_gyro = 1e-5;
