@@ -37,10 +37,10 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using livod::drivers::CaptureCounters;
-using livod::drivers::RawPacket;
-using livod::drivers::UdpStream;
-using livod::drivers::UdpStreamConfig;
+using livod::drivers::capture::CaptureCounters;
+using livod::drivers::capture::RawPacket;
+using livod::drivers::capture::UdpStream;
+using livod::drivers::capture::UdpStreamConfig;
 
 constexpr std::uint32_t kLoopback = 0x7F000001;
 
@@ -190,7 +190,7 @@ Trial run_trial(std::size_t payload_bytes, double rate_pps, const Options& o) {
   // arrived as a drop as well.
   t.kernel_drops = std::max<std::uint64_t>(c.kernel_drops, sent - std::min(sent, c.datagrams));
   t.ring_overruns = c.ring_overruns;
-  t.rt = livod::drivers::to_string(c.priority);
+  t.rt = livod::drivers::capture::to_string(c.priority);
   return t;
 }
 

@@ -32,20 +32,26 @@ function(livod_add_library name)
   target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LIBS} PRIVATE livod_warnings ${ARG_PRIVATE_LIBS})
 endfunction()
 
-# livod_add_test(NAME SOURCES ... LIBS ... [LABELS ...])
+# livod_add_test(NAME SOURCES ... LIBS ... [LABELS ...] [RUN_SERIAL])
 # Tests find the real captures through LIVOD_DATA_DIR (environment overrides the build default).
+# RUN_SERIAL: ctest runs nothing else meanwhile (real-time tests that expect zero packet loss).
 function(livod_add_test name)
   if(NOT LIVOD_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "RUN_SERIAL" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  set(serial FALSE)
+  if(ARG_RUN_SERIAL)
+    set(serial TRUE)
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} livod_test_support GTest::gtest GTest::gtest_main
                                         livod_warnings)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 120
     PROPERTIES LABELS "${ARG_LABELS}" ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR}"
-               ENVIRONMENT_MODIFICATION "LIVOD_SOURCE_DIR=set:${PROJECT_SOURCE_DIR}")
+               ENVIRONMENT_MODIFICATION "LIVOD_SOURCE_DIR=set:${PROJECT_SOURCE_DIR}"
+               RUN_SERIAL ${serial})
 endfunction()
 
 # livod_glob_library(NAME DIR [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
@@ -97,7 +103,7 @@ function(livod_add_netns_test name)
   if(NOT LIVOD_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "TIMEOUT" "COMMAND;LABELS;ENVIRONMENT" ${ARGN})
+  cmake_parse_arguments(ARG "RUN_SERIAL" "TIMEOUT" "COMMAND;LABELS;ENVIRONMENT" ${ARGN})
   if(NOT ARG_COMMAND)
     message(FATAL_ERROR "livod_add_netns_test(${name}): COMMAND is required")
   endif()
@@ -105,9 +111,13 @@ function(livod_add_netns_test name)
   set_tests_properties(${name} PROPERTIES
     SKIP_RETURN_CODE 77
     LABELS "netns;${ARG_LABELS}"
-    ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR};${ARG_ENVIRONMENT}")
+    ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR};${ARG_ENVIRONMENT}"
+    ENVIRONMENT_MODIFICATION "LIVOD_SOURCE_DIR=set:${PROJECT_SOURCE_DIR}")
   if(ARG_TIMEOUT)
     set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT})
+  endif()
+  if(ARG_RUN_SERIAL)
+    set_tests_properties(${name} PROPERTIES RUN_SERIAL TRUE)
   endif()
 endfunction()
 
@@ -118,7 +128,7 @@ function(livod_add_netns_gtest name)
   if(NOT LIVOD_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "RUN_SERIAL" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} livod_test_support GTest::gtest GTest::gtest_main
@@ -127,5 +137,10 @@ function(livod_add_netns_gtest name)
   if(ARG_TIMEOUT)
     set(timeout_arg TIMEOUT ${ARG_TIMEOUT})
   endif()
-  livod_add_netns_test(${name} COMMAND $<TARGET_FILE:${name}> LABELS ${ARG_LABELS} ${timeout_arg})
+  set(serial_arg)
+  if(ARG_RUN_SERIAL)
+    set(serial_arg RUN_SERIAL)
+  endif()
+  livod_add_netns_test(${name} COMMAND $<TARGET_FILE:${name}> LABELS ${ARG_LABELS} ${timeout_arg}
+                       ${serial_arg})
 endfunction()

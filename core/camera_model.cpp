@@ -27,14 +27,15 @@ Eigen::Vector2d CameraModel::distort_radtan(const Eigen::Vector2d& m, Eigen::Mat
   const double k2 = k_.distortion[1];
   const double p1 = k_.distortion[2];
   const double p2 = k_.distortion[3];
+  const double k3 = k_.radtan_k3;
   const double x = m.x();
   const double y = m.y();
   const double r2 = x * x + y * y;
-  const double radial = 1.0 + k1 * r2 + k2 * r2 * r2;
+  const double radial = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
   const Eigen::Vector2d d(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
                           y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
   if (J != nullptr) {
-    const double dradial_dr2 = k1 + 2.0 * k2 * r2;
+    const double dradial_dr2 = k1 + 2.0 * k2 * r2 + 3.0 * k3 * r2 * r2;
     (*J)(0, 0) = radial + x * dradial_dr2 * 2.0 * x + 2.0 * p1 * y + p2 * 6.0 * x;
     (*J)(0, 1) = x * dradial_dr2 * 2.0 * y + 2.0 * p1 * x + p2 * 2.0 * y;
     (*J)(1, 0) = y * dradial_dr2 * 2.0 * x + p1 * 2.0 * x + 2.0 * p2 * y;

@@ -22,6 +22,8 @@ struct CameraIntrinsics {
   double fx = 0, fy = 0, cx = 0, cy = 0;
   // radtan: k1, k2, p1, p2; equidistant: k1, k2, k3, k4
   std::array<double, 4> distortion{0, 0, 0, 0};
+  // radtan only: the sixth-order radial term (OpenCV's and Kalibr's fifth coefficient); 0 = none.
+  double radtan_k3 = 0.0;
 
   // The same camera with the image resized by `scale` (FAST-LIVO2's `scale` option).
   [[nodiscard]] CameraIntrinsics scaled(double scale) const;

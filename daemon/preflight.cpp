@@ -75,4 +75,14 @@ std::vector<ConfigProblem> check_config_files(const LivodConfig& config, bool op
   return problems;
 }
 
+ConfigResult load_checked_config(const std::filesystem::path& path, bool open_recordings) {
+  ConfigResult loaded = load_config(path);
+  if (loaded.ok()) {
+    for (auto& p : check_config_files(loaded.config, open_recordings)) {
+      loaded.problems.push_back(std::move(p));
+    }
+  }
+  return loaded;
+}
+
 }  // namespace livod::daemon

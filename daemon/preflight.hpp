@@ -9,13 +9,19 @@
 //     Ouster bag carries).
 // Problems carry the sensor's YAML path and line.
 
+#include <filesystem>
 #include <vector>
 
 #include "daemon/config/config.hpp"
+#include "daemon/config/load_config.hpp"
 #include "daemon/config/problems.hpp"
 
 namespace livod::daemon {
 
 std::vector<ConfigProblem> check_config_files(const LivodConfig& config, bool open_recordings);
+
+// load_config, then (when the YAML itself has no error) check_config_files: what `run` and
+// `replay` check before anything starts.
+ConfigResult load_checked_config(const std::filesystem::path& path, bool open_recordings);
 
 }  // namespace livod::daemon

@@ -15,6 +15,10 @@
 
 #include "core/measurement.hpp"
 
+namespace livod {
+struct ImageFrame;  // core/image.hpp (kept out of this header: it pulls in OpenCV)
+}  // namespace livod
+
 namespace livod::drivers {
 
 // Counters a decoder keeps; read by health reporting and printed by `livod decode`.
@@ -32,12 +36,19 @@ struct DecoderCounters {
   // past the next scan's first packet): dropped, so that a late packet neither splits the scan
   // under construction nor becomes a scan of its own.
   std::uint64_t late_points = 0;
+  // The sensor clock jumped (time sync gained or lost, timestamp type changed, reset): a clock
+  // event, not a loss. The timeline restarts at the new time and no packets are counted missing
+  // across the jump (the clock domain downstream sees the step and restarts its estimate).
+  std::uint64_t clock_jumps = 0;
 };
 
 // Callbacks receive references valid only during the call (the decoder reuses its buffers).
 struct DecoderSinks {
   std::function<void(const LidarScan&)> on_scan;
   std::function<void(const ImuSample&)> on_imu;
+  // Camera frames (image sources): stamp.sensor / stamp.host, exposure and stamp_marks set,
+  // stamp.mapped left to the clock domain. The frame owns its pixels (a sink may keep them).
+  std::function<void(const ImageFrame&)> on_image;
 };
 
 // One received UDP payload. host_time_ns is the receive time (kernel stamp live, the pcap record

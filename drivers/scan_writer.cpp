@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "io/pcd_writer.hpp"
 
 namespace livod::drivers {
 namespace {
@@ -59,17 +60,9 @@ ScanWriter::~ScanWriter() {
 }
 
 void ScanWriter::write_pcd_header(std::uint64_t points) {
-  std::string header =
-      "# .PCD v0.7 - Point Cloud Data file format (livod decode)\n"
-      "VERSION 0.7\n"
-      "FIELDS x y z intensity t ring\n"
-      "SIZE 4 4 4 4 8 2\n"
-      "TYPE F F F F F U\n"
-      "COUNT 1 1 1 1 1 1\n";
-  append_text(header, "WIDTH %*" PRIu64 "\n", kCountWidth, points);
-  header += "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n";
-  append_text(header, "POINTS %*" PRIu64 "\n", kCountWidth, points);
-  header += format_ == ScanFileFormat::kPcdAscii ? "DATA ascii\n" : "DATA binary\n";
+  const std::string header =
+      io::pcd_header({{"x"}, {"y"}, {"z"}, {"intensity"}, {"t", 8}, {"ring", 2, 'U'}}, points,
+                     format_ != ScanFileFormat::kPcdAscii, "livod decode", kCountWidth);
   out_.write(header.data(), static_cast<std::streamsize>(header.size()));
 }
 

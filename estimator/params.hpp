@@ -83,18 +83,38 @@ struct VioParams {
   int max_iterations = 5;             // per pyramid level
   double outlier_threshold = 1000.0;  // per-pixel mean squared photometric error gate
   double img_point_cov = 100.0;       // photometric noise variance (grey levels^2)
-  int patch_size = 8;                 // patch edge (px)
-  int pyramid_levels = 3;             // image pyramid levels used by the update
-  bool normal_en = true;              // warp patches by the plane-induced homography
+  // Huber kernel on every pixel's residual at huber_k * sqrt(img_point_cov) grey levels
+  // (FAST-LIVO2 has no robust kernel, defect 11).
+  double huber_k = 1.345;
+  int patch_size = 8;      // patch edge (px)
+  int pyramid_levels = 3;  // image pyramid levels used by the update
+  bool normal_en = true;   // warp patches by the plane-induced homography
   bool exposure_estimate = true;
-  double inv_expo_cov = 0.1;           // inverse-exposure random walk
-  int grid_cell_px = 30;               // one visual point per grid cell (cell edge in px)
-  int max_visual_points = 20000;       // the visual map is bounded (FAST-LIVO2's grows forever)
-  int max_observations = 30;           // patches kept per visual point
+  double inv_expo_cov = 0.1;  // inverse-exposure random walk
+  int grid_cell_px = 30;      // one visual point per grid cell (cell edge in px)
+  int min_patches = 10;       // fewer usable patches in an image: no visual update
+  // Points seen more obliquely than this (angle between the view ray and the surface normal) are
+  // not used (the paper's rejection; FAST-LIVO2's code has it commented out).
+  double max_view_angle_deg = 80.0;
+  // New visual points need a Shi-Tomasi score (smallest eigenvalue of the 8x8 structure tensor,
+  // mean per pixel, grey levels^2 / px^2) of at least this: flat patches constrain nothing.
+  double min_corner_score = 4.0;
+  int max_visual_points = 20000;  // the visual map is bounded (FAST-LIVO2's grows forever)
+  // Reference patches kept per visual point (FAST-LIVO2 keeps up to 30 observations and a
+  // reference to each whole image; here each is a small patch per pyramid level).
+  int max_observations = 8;
+  // A point gets a new observation when the camera moved this far, turned this much or the point
+  // moved this many pixels since its last one (FAST-LIVO2 hard-codes 0.5 m, 0.3 rad, 40 px).
+  double observation_distance_m = 0.5;
+  double observation_angle_deg = 17.2;
+  double observation_pixels = 40.0;
   double visual_voxel_size = 0.5;      // visual map voxel edge (m), hard-coded upstream
   double depth_discontinuity_m = 0.5;  // reject points near a LiDAR depth jump
-  // LIO runs alone, at LiDAR rate, when no image arrives within this time after a scan.
+  // LIO runs alone, at LiDAR rate, for a scan when no image arrives within this time (and within
+  // a scan period) after its end: the longest LIO waits for a camera (sync/measurement_sync.hpp).
   double image_timeout_s = 0.15;
+  // A level stops iterating when one step moves the state less than this (hard-coded upstream).
+  ConvergenceParams convergence{0.001, 0.00001};
 };
 
 struct EstimatorParams {

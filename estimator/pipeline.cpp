@@ -33,7 +33,8 @@ PointNoise point_noise(const LioParams& lio) {
 LioPipeline::LioPipeline(PipelineOptions options)
     : options_(std::move(options)),
       initializer_(options_.params.imu),
-      sync_(SyncParams{options_.max_queued_scans, options_.max_queued_imu}),
+      sync_(SyncParams{options_.max_queued_scans, options_.max_queued_imu, 8,
+                       options_.params.vio.image_timeout_s}),
       map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
       downsampler_(options_.params.lio.filter_size_surf) {
   const LioParams& lio = options_.params.lio;
@@ -44,6 +45,11 @@ LioPipeline::LioPipeline(PipelineOptions options)
   p2p_ = std::make_unique<PointToPlane>(*map_, options_.T_imu_lidar, options_.runner,
                                         point_noise(options_.params.lio),
                                         options_.params.lio.incidence_term);
+  if (options_.camera && options_.params.vio.enabled) {
+    vio_ = std::make_unique<vio::VioProcessor>(options_.params.vio, options_.params.map,
+                                               *options_.camera, options_.runner);
+    sync_.enable_images(true);
+  }
 }
 
 LioPipeline::~LioPipeline() = default;
@@ -69,25 +75,80 @@ void LioPipeline::add_imu(const ImuSample& sample) {
   }
   prev_imu_ = sample;
   have_prev_imu_ = true;
+  // The initialisation ends at this sample or a later one: scans ending by now precede it.
+  while (!early_scans_.empty() &&
+         MeasurementSync::scan_end(early_scans_.front()) <= sample.stamp.mapped) {
+    early_scans_.pop_front();
+    ++counters_.scans_before_init;
+  }
   if (initializer_.add(sample)) {
     belief_ = *initializer_.result();
     state_time_ = initializer_.time();
     sync_.start(state_time_);
+    init_time_ = state_time_;
+    // The scans that begin after the initialisation are the filter's first, whichever arrived
+    // first: replay (time order) and live (arrival order) start from the same scan.
+    for (LidarScan& scan : early_scans_) {
+      if (scan.start.mapped < init_time_) {
+        ++counters_.scans_before_init;
+        continue;
+      }
+      --init_counters_.scans_in;  // the sync counts it again
+      sync_.add_scan(std::move(scan));
+    }
+    early_scans_.clear();
   }
 }
 
 void LioPipeline::add_scan(LidarScan scan) {
   if (initializer_.done()) {
+    // A scan that began before the initialisation ended has points the filter holds no state
+    // for: dropped whichever way it arrived, so live and replay start from the same scan.
+    if (!scan.empty() && scan.start.mapped < init_time_) {
+      ++init_counters_.scans_in;
+      ++counters_.scans_before_init;
+      return;
+    }
     sync_.add_scan(std::move(scan));
     return;
   }
   ++init_counters_.scans_in;
-  if (!scan.empty()) ++counters_.scans_before_init;
+  if (scan.empty()) return;
+  if (have_prev_imu_ && MeasurementSync::scan_end(scan) <= prev_imu_.stamp.mapped) {
+    ++counters_.scans_before_init;
+    return;
+  }
+  early_scans_.push_back(std::move(scan));
+  if (early_scans_.size() > options_.max_queued_scans) {
+    early_scans_.pop_front();
+    ++counters_.scans_before_init;
+  }
+}
+
+void LioPipeline::add_image(ImageFrame image) {
+  if (!vio_) {
+    ++images_unused_;
+    return;
+  }
+  // Before the IMU initialisation there is no timeline yet: the sync drops nothing it cannot use
+  // later, and an image before the start would be late anyway.
+  if (!initializer_.done()) {
+    ++images_unused_;
+    return;
+  }
+  sync_.add_image(std::move(image));
 }
 
 PipelineCounters LioPipeline::counters() const {
   PipelineCounters c = counters_;
   const SyncCounters& s = sync_.counters();
+  c.images_in = s.images_in + images_unused_;
+  c.images_unused = images_unused_;
+  c.images_late = s.images_late;
+  c.images_dropped = s.images_out_of_order + s.images_queue_overflow;
+  c.images_rejected = images_rejected_;
+  c.image_groups = s.image_groups;
+  c.vio_updates = vio_updates_;
   c.scans_in = init_counters_.scans_in + s.scans_in;
   c.scans_out_of_order = s.scans_out_of_order;
   c.scans_queue_overflow = s.scans_queue_overflow;
@@ -171,12 +232,37 @@ void LioPipeline::propagate_to(const MeasurementGroup& group, ImuPoseTrack& trac
   push_pose(ImuReading{prev_imu_.gyro_rad_s, prev_imu_.accel_m_s2});
 }
 
+void LioPipeline::visual_update(const MeasurementGroup& group, bool lio_matched,
+                                FrameReport& report) {
+  scan_world_.resize(world_points_.size());
+  for (std::size_t i = 0; i < world_points_.size(); ++i) scan_world_[i] = world_points_[i].p;
+  const std::vector<Eigen::Vector3d>& normals = lio_matched ? p2p_->matched_normals() : no_normals_;
+  report.vio = vio_->process(group.image, belief_, scan_world_, normals, *map_, options_.vio_debug);
+  if (!report.vio.ran) {
+    ++images_rejected_;
+    return;
+  }
+  if (report.vio.updated) ++vio_updates_;
+  if (options_.colorize) {
+    // The scan as registered after both updates (the map export uses the same pose).
+    const Eigen::Matrix3d R_wl = belief_.x.R_world_imu * options_.T_imu_lidar.linear();
+    const Eigen::Vector3d p_wl =
+        belief_.x.R_world_imu * options_.T_imu_lidar.translation() + belief_.x.p_world_imu;
+    scan_world_.resize(undistorted_.size());
+    for (std::size_t i = 0; i < undistorted_.size(); ++i) {
+      scan_world_[i] = R_wl * undistorted_[i] + p_wl;
+    }
+    vio_->colorize(belief_.x, scan_world_, colors_, colored_);
+  }
+}
+
 void LioPipeline::process_group(const MeasurementGroup& group,
                                 const std::function<void(const PipelineOutput&)>& on_output) {
   const auto t_total = std::chrono::steady_clock::now();
   const auto& lio = options_.params.lio;
   FrameReport report;
   const LidarScan& scan = group.scan;
+  report.kind = group.kind;
   report.t = group.t_update;
   report.scan_sequence = scan.sequence;
   report.raw_points = static_cast<int>(scan.size());
@@ -291,6 +377,14 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   map_->insert(world_points_, options_.runner);
   map_->slide(belief_.x.p_world_imu);
   report.timings.map_ms = ms_since(t0);
+
+  colors_.clear();
+  colored_.clear();
+  if (group.kind == MeasurementGroup::Kind::image && vio_) {
+    t0 = std::chrono::steady_clock::now();
+    visual_update(group, matched, report);
+    report.timings.vio_ms = ms_since(t0);
+  }
   // A full map traversal costs as much as a large part of the frame on a big (street) map:
   // refreshed every kMapStatsPeriod frames, reported from the last refresh in between.
   if (counters_.scans_processed % kMapStatsPeriod == 0) map_stats_ = map_->stats();
@@ -301,9 +395,19 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   if (on_output) {
     PipelineOutput out{group.t_update, belief_.x, belief_.P, report};
     out.registered_world = world_points_;
-    out.T_world_lidar.linear() = R_wl;
+    // The pose after every update of the group (the visual one moves it in an image group).
+    const Eigen::Matrix3d& R_out = belief_.x.R_world_imu;
+    out.T_world_lidar.linear() = R_out * options_.T_imu_lidar.linear();
     out.T_world_lidar.translation() =
-        R * options_.T_imu_lidar.translation() + belief_.x.p_world_imu;
+        R_out * options_.T_imu_lidar.translation() + belief_.x.p_world_imu;
+    if (!colors_.empty()) {
+      out.colored_world = scan_world_;
+      out.colors = colors_;
+      out.in_image = colored_;
+    }
+    if (options_.vio_debug && report.kind == MeasurementGroup::Kind::image && vio_) {
+      out.vio_grey = vio_->last_grey();
+    }
     on_output(out);
   }
 }

@@ -1,21 +1,23 @@
 #pragma once
-// The LiDAR-inertial odometry loop (fast-livo2-notes.md 1.1-1.3, LIO mode), one measurement group
-// per LiDAR scan: IMU initialisation, forward propagation to the scan end, backward undistortion,
-// downsampling, the iterated point-to-plane update and map insertion. Inputs carry mapped times
+// The odometry loop: LiDAR-inertial (fast-livo2-notes.md 1.1-1.3) and, with a camera, visual too
+// (1.4). Per measurement group (sync/measurement_sync.hpp): IMU initialisation, forward
+// propagation to the update time, backward undistortion, downsampling, the iterated
+// point-to-plane update and map insertion; in an image group then the photometric update at the
+// same instant (vio/vio_processor.hpp). Without a camera (or with estimator.vio.enabled false)
+// every group is a scan and this is the LIO of before, unchanged. Inputs carry mapped times
 // (every per-sensor offset already applied once, by the clock domain); outputs are stamped with
-// measurement time (the scan end), never wall-clock time.
-//
-// Built for the VIO half to slot in: a group is (IMU samples, scan points, update time); an image
-// time can become the update time later (scan recombination) without changing the filter.
+// measurement time (the scan end or the image's mid-exposure), never wall-clock time.
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
 
+#include "core/image.hpp"
 #include "core/measurement.hpp"
 #include "estimator/filter/esikf.hpp"
 #include "estimator/imu/initializer.hpp"
@@ -28,6 +30,7 @@
 #include "estimator/params.hpp"
 #include "estimator/sync/measurement_sync.hpp"
 #include "estimator/task_runner.hpp"
+#include "estimator/vio/vio_processor.hpp"
 
 namespace livod::estimator {
 
@@ -42,6 +45,10 @@ struct PipelineOptions {
   double degeneracy_ratio = 0.02;  // translation information ratio below which a frame is flagged
   std::size_t max_queued_scans = 20;  // bounded input queues (oldest dropped, counted)
   std::size_t max_queued_imu = 4000;
+  // The camera of the visual update; none: LIO only. Used when params.vio.enabled.
+  std::optional<vio::VioCamera> camera;
+  bool colorize = false;   // colour the scan from the image in image groups (PipelineOutput)
+  bool vio_debug = false;  // fill FrameReport::vio.debug with every patch (--debug-images)
 };
 
 struct FrameTimings {
@@ -51,10 +58,12 @@ struct FrameTimings {
   double residuals_ms = 0.0;  // point covariances, association and residual rows, all iterations
   double update_ms = 0.0;     // the iterated update without its residuals (solves, covariance)
   double map_ms = 0.0;
+  double vio_ms = 0.0;  // the visual update of an image group (split in FrameReport::vio)
   double total_ms = 0.0;
 };
 
 struct FrameReport {
+  MeasurementGroup::Kind kind = MeasurementGroup::Kind::lidar;
   MappedTime t;
   std::uint32_t scan_sequence = 0;
   int raw_points = 0;
@@ -66,7 +75,8 @@ struct FrameReport {
   bool updated = false;  // false: first frame (map seeded) or too few matches
   DegeneracyReport degeneracy;
   FrameTimings timings;
-  VoxelMapStats map;  // refreshed every 10th frame (a full traversal), else the last refresh
+  VoxelMapStats map;   // refreshed every 10th frame (a full traversal), else the last refresh
+  vio::VioReport vio;  // image groups
 };
 
 struct PipelineOutput {
@@ -78,8 +88,18 @@ struct PipelineOutput {
   // world frame with their world covariances (pose uncertainty included). Valid during the
   // output callback only.
   std::span<const CovPoint> registered_world;
-  // The LiDAR's pose at t: T_world_imu * T_imu_lidar.
+  // The LiDAR's pose at t (after both updates in an image group): T_world_imu * T_imu_lidar.
   Eigen::Isometry3d T_world_lidar = Eigen::Isometry3d::Identity();
+  // Image groups with PipelineOptions::colorize: the same points (in registered_world's order)
+  // placed with the pose after the visual update, their colours (0x00RRGGBB) sampled from the
+  // image and whether each fell inside it (1) or not (0). Empty otherwise. Valid during the output
+  // callback only.
+  std::span<const Eigen::Vector3d> colored_world;
+  std::span<const std::uint32_t> colors;
+  std::span<const std::uint8_t> in_image;
+  // Image groups with PipelineOptions::vio_debug: the grey image the visual update used (its
+  // patches are in report.vio.debug); empty otherwise.
+  cv::Mat vio_grey;
 };
 
 struct PipelineCounters {
@@ -93,6 +113,13 @@ struct PipelineCounters {
   std::uint64_t imu_queue_overflow = 0;
   std::uint64_t frames_without_update = 0;
   std::uint64_t degenerate_frames = 0;
+  std::uint64_t images_in = 0;
+  std::uint64_t images_unused = 0;    // no camera configured or VIO disabled
+  std::uint64_t images_late = 0;      // arrived after the estimator passed their time
+  std::uint64_t images_dropped = 0;   // out of order or queue overflow
+  std::uint64_t images_rejected = 0;  // wrong size or format (VioReport::problem)
+  std::uint64_t image_groups = 0;     // LIO + VIO at an image time
+  std::uint64_t vio_updates = 0;      // image groups whose visual update corrected the state
 };
 
 class LioPipeline {
@@ -103,8 +130,14 @@ class LioPipeline {
   void add_imu(const ImuSample& sample);
   // Taken by value (it is queued): move a scan in when the caller is done with it.
   void add_scan(LidarScan scan);
-  // Runs the groups whose scan end is covered by IMU data, at most `max_groups` of them (the
-  // daemon runs one at a time so that it can drain its rings in between); returns how many ran.
+  // An image stamped with its mid_exposure (core/image.hpp). The pipeline keeps a reference to
+  // the pixels until the image is processed: the producer must not write into them afterwards.
+  // Ignored (counted) without a camera or with VIO disabled.
+  void add_image(ImageFrame image);
+  [[nodiscard]] bool vio_active() const { return vio_ != nullptr; }
+  // Runs the groups whose update time (scan end or image time) is covered by IMU data, at most
+  // `max_groups` of them (the daemon runs one at a time so that it can drain its rings in
+  // between); returns how many ran.
   std::size_t process(const std::function<void(const PipelineOutput&)>& on_output,
                       std::size_t max_groups = SIZE_MAX);
   // Scans queued for the estimator (waiting for IMU data or for their turn).
@@ -121,6 +154,8 @@ class LioPipeline {
   [[nodiscard]] const std::vector<Eigen::Vector3d>& last_scan_points() const {
     return undistorted_;
   }
+  // The visual half, when active (debug drawing, map statistics).
+  [[nodiscard]] const vio::VioProcessor* vio() const { return vio_.get(); }
 
  private:
   void process_group(const MeasurementGroup& group,
@@ -128,6 +163,8 @@ class LioPipeline {
   // Propagates the belief through the group's IMU samples to its update time, recording the IMU
   // poses along the way (for undistortion).
   void propagate_to(const MeasurementGroup& group, ImuPoseTrack& track);
+  // The visual update of an image group, after the LIO update and map insertion.
+  void visual_update(const MeasurementGroup& group, bool lio_matched, FrameReport& report);
   // fn(begin, end) over [0, n), on the runner when there is one.
   void for_points(std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn) const;
 
@@ -151,6 +188,11 @@ class LioPipeline {
     std::uint64_t imu_in = 0;
     std::uint64_t imu_out_of_order = 0;
   } init_counters_;  // input while the IMU initialisation is pending
+  // Scans that arrived while the initialisation was pending and end after every IMU sample seen:
+  // whether they precede the initialisation is only known once it ends (live, the LiDAR and the
+  // IMU arrive through different sockets, so arrival order is not time order).
+  std::deque<LidarScan> early_scans_;
+  MappedTime init_time_;  // when the initialisation ended: scans must begin after it
   ImuPoseTrack track_;
   std::vector<std::uint32_t> indices_;
   std::vector<std::uint32_t> ring_counts_;  // valid points seen per ring (point_filter_num)
@@ -159,6 +201,14 @@ class LioPipeline {
   std::vector<CovPoint> world_points_;
   static constexpr std::uint64_t kMapStatsPeriod = 10;
   VoxelMapStats map_stats_;
+  std::unique_ptr<vio::VioProcessor> vio_;
+  std::vector<Eigen::Vector3d> scan_world_;  // the scan in the world after the LIO update
+  std::vector<Eigen::Vector3d> no_normals_;
+  std::vector<std::uint32_t> colors_;
+  std::vector<std::uint8_t> colored_;
+  std::uint64_t images_unused_ = 0;
+  std::uint64_t images_rejected_ = 0;
+  std::uint64_t vio_updates_ = 0;
 };
 
 }  // namespace livod::estimator

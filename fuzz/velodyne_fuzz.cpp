@@ -39,12 +39,15 @@ void fuzz_data_packet(Model model, bool veloview, std::span<const std::byte> dat
   std::vector<v::DecodedReturn> out(v::DataPacketDecoder::kMaxReturns);
   const auto packet = sized(data, livod::drivers::velodyne::wire::kDataPacketSize);
   const double fallback_rate = data.empty() ? 0.0 : static_cast<double>(data[0]) * 1e-6;
-  const auto r = decoder.decode(packet, fallback_rate, out);
+  const double dating_rate = data.size() < 2 ? 0.0 : static_cast<double>(data[1]) * 1e-5;
+  const auto r = decoder.decode(packet, fallback_rate, out, dating_rate);
   if (r.count > out.size()) __builtin_trap();
   for (std::size_t i = 0; i < r.count; ++i) {
     // Every emitted point comes from a non-zero range and has finite coordinates.
     if (!(out[i].distance_m > 0.0f) || out[i].x != out[i].x || out[i].y != out[i].y)
       __builtin_trap();
+    // Firing times never go back from the block's table time (a FOV delay only adds).
+    if (out[i].t_offset_ns < decoder.timing().offset_ns(r.dual, out[i].block, 0)) __builtin_trap();
   }
 }
 
@@ -55,6 +58,10 @@ void fuzz_stream(Model model, std::span<const std::byte> data) {
   options.cut = static_cast<v::ScanCut>(data.empty() ? 0 : static_cast<int>(data[0]) % 3);
   options.cut_angle_deg = 90.0;
   options.cut_period_ns = 50'000'000;
+  // A configured FOV window (270 -> 90 degrees) on some inputs: the skipped-sector accounting.
+  if (!data.empty() && (static_cast<int>(data[0]) & 0x08) != 0) {
+    options.fov = livod::drivers::AzimuthWindow{270.0, 90.0};
+  }
   v::VelodyneDecoder decoder(options);
   livod::drivers::DecoderSinks sinks;
   std::uint64_t points = 0;

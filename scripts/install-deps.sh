@@ -16,8 +16,8 @@ packages=(
   libexpat1-dev
   # LCM (C++ and the Java pieces lcm-spy needs)
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
-  # systemd integration
-  libsystemd-dev
+  # systemd integration (systemd: systemd-analyze and systemd-sysusers check the unit in tests)
+  libsystemd-dev systemd
   # bag chunk compression, hashing in tests
   libbz2-dev liblz4-dev libssl-dev zlib1g-dev
   # tests and benchmarks (python3: the generated LCM Python types are tested with it)

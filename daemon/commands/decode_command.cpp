@@ -1,15 +1,13 @@
 // `livod decode CAPTURE.pcap --model MODEL [--calibration FILE] [--metadata FILE.json]
-//  [--port N...] -o OUT.csv|OUT.pcd [--pcd-ascii]`: decodes a LiDAR capture with the driver the
-// model names (drivers/registry; Ouster product names such as OS1-128 or OS-1-128 are accepted
-// and cross-checked with the metadata) and writes every scan (drivers/scan_writer). Prints
-// packet, scan, point, drop, gap and error counts, and every stretch of the capture that could
-// not be read. Exit codes: 0 done, 1 an unreadable capture or calibration, or a decode that gave
-// no point or more decode errors than packets (a wrong model, port or metadata), 2 a usage error
-// (unknown model, unsupported output extension), 3 part of the capture could not be read (the
-// output covers the rest) and --accept-partial-input was not given.
-//
-// --config is not offered yet: the YAML configuration loader (daemon/config) is being written;
-// the decoder options it will carry (cut angle, range limits) have defaults meanwhile.
+//  [--config C.yaml] [--port N...] -o OUT.csv|OUT.pcd [--pcd-ascii] [--accept-partial-input]`:
+// decodes a LiDAR capture with the driver of the family that has the model
+// (drivers/lidar_family.hpp; Ouster product names such as OS1-128 or OS-1-128 are checked
+// against the metadata) and writes every scan (drivers/scan_writer). Prints packet, scan, point,
+// drop, gap and error counts, and every stretch of the capture that could not be read. Exit
+// codes: 0 done, 1 an unreadable capture, calibration or configuration, a model the metadata
+// contradicts, or a decode that gave no point or more decode errors than packets (a wrong model,
+// port or metadata), 2 a usage error (unknown model, unsupported output extension), 3 part of the
+// capture could not be read (the output covers the rest) and --accept-partial-input was not given.
 
 #include <fmt/core.h>
 #include <CLI/CLI.hpp>
@@ -28,9 +26,8 @@
 #include "daemon/config/load_config.hpp"
 #include "daemon/config/problems.hpp"
 #include "daemon/config/sensor_models.hpp"
-#include "daemon/replay/decoder_factory.hpp"
-#include "drivers/ouster/metadata.hpp"
-#include "drivers/registry.hpp"
+#include "drivers/hesai/hesai_decoder.hpp"
+#include "drivers/lidar_family.hpp"
 #include "drivers/scan_writer.hpp"
 #include "drivers/velodyne/velodyne_decoder.hpp"
 #include "io/input_loss.hpp"
@@ -53,26 +50,30 @@ struct DecodeArgs {
   std::string output;
   bool pcd_ascii = false;
   bool accept_partial_input = false;
-  std::string config;  // optional livod configuration: supplies calibration / metadata files
+  std::string config;  // optional livod configuration: its sensor of this model supplies the rest
 };
 
-// Takes the calibration/metadata of the configured LiDAR with the same model (explicit options
-// win). Returns false after printing every problem when the configuration has errors.
-bool apply_config(const std::string& path, const std::string& model, drivers::DecoderConfig& out) {
+// The decoder configuration of the configured LiDAR with the same model (its files, frame cut
+// and family section). Returns false after printing every problem when the configuration has
+// errors; leaves `out` alone when no enabled sensor has the model.
+bool apply_config(const std::string& path, const drivers::ModelMatch& wanted,
+                  drivers::LidarDecoderConfig& out) {
   const ConfigResult result = load_config(path);
   for (const auto& problem : result.problems) {
     fmt::print(stderr, "{}\n", format_problem(result.source, problem));
   }
   if (result.error_count() > 0) return false;
-  const drivers::DecoderEntry* wanted = drivers::find_decoder(model);
   for (const auto& sensor : result.config.sensors) {
-    if (!sensor.enabled || drivers::find_decoder(sensor.model) != wanted) continue;
-    if (!out.calibration && !sensor.calibration.empty()) out.calibration = sensor.calibration;
-    if (!out.metadata && !sensor.metadata.empty()) out.metadata = sensor.metadata;
+    if (!sensor.enabled || lidar_family(sensor.driver) != wanted.family) continue;
+    const drivers::LidarModelInfo* model = wanted.family->find_model(sensor.model);
+    // An Ouster sensor configured without a model matches any Ouster model.
+    if (model != nullptr && model != wanted.model) continue;
+    out = decoder_config(sensor);
+    out.model = wanted.model->name;
     return true;
   }
   fmt::print(stderr, "livod decode: {} configures no enabled {} sensor; decoding with defaults\n",
-             path, model);
+             path, wanted.model->name);
   return true;
 }
 
@@ -82,10 +83,28 @@ void print_family_details(const drivers::LidarDecoder& decoder) {
     fmt::print(
         "velodyne: dropped returns {} (zero range {}, dual duplicates {}, out of range {}), "
         "late packets {}, factory byte mismatches {}, position packets {} (GPS fixes {}), "
-        "hour rollovers {}, GPS time re-anchors {}\n",
+        "hour rollovers {}, GPS time re-anchors {}, FOV boundary packets {}, undated blocks {}\n",
         c.zero_ranges + c.duplicate_returns + c.out_of_range, c.zero_ranges, c.duplicate_returns,
         c.out_of_range, c.late_packets, c.factory_byte_mismatches, c.position_packets, c.gps_fixes,
-        c.hour_rollovers, c.time_rebases);
+        c.hour_rollovers, c.time_rebases, c.fov_boundary_packets, c.undated_blocks);
+  }
+  if (const auto* h = dynamic_cast<const drivers::hesai::HesaiDecoder*>(&decoder)) {
+    namespace hs = drivers::hesai;
+    const auto& c = h->hesai_counters();
+    std::string errors;
+    for (std::size_t k = 1; k < c.packet_errors.size(); ++k) {
+      if (c.packet_errors[k] == 0) continue;
+      errors += fmt::format("{}{} {}", errors.empty() ? "" : ", ",
+                            hs::to_string(static_cast<hs::PacketError>(k)), c.packet_errors[k]);
+    }
+    fmt::print(
+        "hesai: dropped returns {} (zero range {}, dual duplicates {}, out of range {}), late "
+        "packets {}, GPS packets {}, high-temperature packets {}, FOV boundary packets {}, motor "
+        "{} RPM, return mode 0x{:02X}{}\n",
+        c.zero_ranges + c.duplicate_returns + c.out_of_range, c.zero_ranges, c.duplicate_returns,
+        c.out_of_range, c.late_packets, c.gps_packets, c.high_temperature_packets,
+        c.fov_boundary_packets, c.motor_rpm, c.return_mode,
+        errors.empty() ? std::string() : "; packet errors: " + errors);
   }
 }
 
@@ -104,27 +123,18 @@ std::string ports_in_capture(const std::string& capture) {
   return out.empty() ? "none" : out;
 }
 
-// An Ouster product name (OS1-128, OS-0-64, ...) for the registry's "OS" entry, or nullopt.
-std::optional<std::string> ouster_product(const std::string& model) {
-  if (drivers::find_decoder(model) != nullptr) return std::nullopt;
-  return canonical_model(Driver::ouster, model);
-}
-
 int run_decode(const DecodeArgs& args) {
-  drivers::DecoderConfig config;
-  config.model = args.model;
-  if (!args.calibration.empty()) config.calibration = args.calibration;
-  if (!args.metadata.empty()) config.metadata = args.metadata;
-  const std::optional<std::string> ouster_model = ouster_product(args.model);
-  if (ouster_model) config.model = "OS";
-  if (drivers::find_decoder(config.model) == nullptr) {
+  const auto match = drivers::find_model(args.model);
+  if (!match) {
     fmt::print(stderr, "livod decode: unknown model '{}'; known models: {}\n", args.model,
-               drivers::known_models());
+               drivers::all_model_names());
     return kExitUsage;
   }
-  if (!args.config.empty() && !apply_config(args.config, config.model, config)) {
-    return kExitFailure;
-  }
+  drivers::LidarDecoderConfig config;
+  config.model = match->model->name;
+  if (!args.config.empty() && !apply_config(args.config, *match, config)) return kExitFailure;
+  if (!args.calibration.empty()) config.calibration = args.calibration;
+  if (!args.metadata.empty()) config.metadata = args.metadata;
   const auto format = drivers::scan_format_for(args.output, args.pcd_ascii);
   if (!format) {
     fmt::print(stderr, "livod decode: output must end in .csv or .pcd: {}\n", args.output);
@@ -132,18 +142,7 @@ int run_decode(const DecodeArgs& args) {
   }
 
   try {
-    if (ouster_model && config.metadata) {
-      SensorConfig sensor;
-      sensor.model = *ouster_model;
-      const std::string mismatch =
-          replay::ouster_model_mismatch(sensor, drivers::ouster::load_metadata(*config.metadata));
-      if (!mismatch.empty()) {
-        fmt::print(stderr, "livod decode: {}: {}\n", config.metadata->string(),
-                   "--model " + args.model + ": " + mismatch);
-        return kExitFailure;
-      }
-    }
-    const std::unique_ptr<drivers::LidarDecoder> decoder = drivers::make_decoder(config);
+    const std::unique_ptr<drivers::LidarDecoder> decoder = match->family->make_decoder(config);
     io::PcapReader reader(args.capture);
     const std::vector<std::uint16_t> ports =
         args.ports.empty() ? decoder->default_ports() : args.ports;
@@ -176,9 +175,10 @@ int run_decode(const DecodeArgs& args) {
         writer.points_written(), imu_samples);
     fmt::print(
         "drops: capture records {} not UDP, {} malformed, {} on other ports, {} incomplete "
-        "fragment sets; sequence gaps {}; decode errors {}\n",
+        "fragment sets; sequence gaps {}; decode errors {}; late points {}; sensor clock jumps "
+        "{}\n",
         p.non_udp, p.malformed, p.filtered, p.incomplete_fragments, c.sequence_gaps,
-        c.decode_errors);
+        c.decode_errors, c.late_points, c.clock_jumps);
     print_family_details(*decoder);
 
     int status = 0;
@@ -229,13 +229,13 @@ void add_decode_command(CLI::App& app, CommandContext& ctx) {
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--model", args->model,
-                  "Sensor model: " + drivers::known_models() +
-                      " (Ouster also by product name, e.g. OS1-128, cross-checked with the "
-                      "metadata)")
+                  "Sensor model: " + drivers::all_model_names() +
+                      " (Ouster: OS for any, or the product name, e.g. OS1-128, checked against "
+                      "the metadata)")
       ->required();
   cmd->add_option("--calibration", args->calibration,
-                  "Velodyne calibration: VeloView XML or ROS/nebula YAML (default: the model's "
-                  "nominal table)")
+                  "Velodyne calibration (VeloView XML or ROS/nebula YAML; default: the model's "
+                  "nominal table) or Hesai angle correction file (CSV, required)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--metadata", args->metadata, "Ouster sensor metadata (JSON)")
       ->check(CLI::ExistingFile);
@@ -248,8 +248,9 @@ void add_decode_command(CLI::App& app, CommandContext& ctx) {
                 "Exit 0 even when part of the capture could not be read (the losses are still "
                 "printed); without it such a decode exits with status 3");
   cmd->add_option("--config", args->config,
-                  "livod configuration: the calibration/metadata files of its sensor with this "
-                  "model are used (explicit --calibration/--metadata win)")
+                  "livod configuration: its sensor with this model supplies the calibration or "
+                  "metadata file, the frame cut and the family section (explicit "
+                  "--calibration/--metadata win)")
       ->check(CLI::ExistingFile);
   cmd->callback([&ctx, args] { ctx.exit_code = run_decode(*args); });
 }

@@ -1,6 +1,9 @@
 // `livod inspect FILE...`: what a recorded file contains, without any sensor configuration.
 //   pcap/pcapng    records, time span, UDP datagrams per destination port with their sources and
 //                  a size histogram, IPv4 fragments reassembled, malformed/non-UDP counts
+//   ROS1 bags      chunks and compression, whether the index is intact (a damaged bag is read by
+//                  scanning its chunks), messages and time span, per topic: messages, mean rate,
+//                  type and how `livod replay` reads it
 //   candump logs   frames per CAN id with rate, lengths and interfaces, frame kinds
 // The file type is recognised from its first bytes (kInspectors below: add new formats there).
 // Every file is reported even if an earlier one fails; the exit code is 1 if any failed.
@@ -20,17 +23,21 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
+#include "core/error.hpp"
 #include "daemon/commands/command.hpp"
 #include "io/candump.hpp"
 #include "io/input_loss.hpp"
 #include "io/pcap.hpp"
+#include "io/rosbag/bag_reader.hpp"
 
 namespace livod::daemon {
 namespace {
@@ -272,6 +279,73 @@ void inspect_candump(const fs::path& path) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// ROS1 bags
+
+bool is_bag(std::span<const std::byte> head) {
+  constexpr std::string_view kMagic = "#ROSBAG V2.0\n";
+  if (head.size() < kMagic.size()) return false;
+  return std::memcmp(head.data(), kMagic.data(), kMagic.size()) == 0;
+}
+
+// How `livod replay` reads a topic of this type (daemon/replay/bag_sources.cpp): the driver a
+// sensor needs to take it, or "-" when replay does not read the type.
+std::string_view replayed_as(std::string_view type) {
+  if (type == "sensor_msgs/Imu") return "dataset_imu";
+  if (type == "sensor_msgs/PointCloud2" || type == "livox_ros_driver/CustomMsg" ||
+      type == "livox_ros_driver2/CustomMsg") {
+    return "dataset_lidar";
+  }
+  if (type == "ouster_ros/PacketMsg") return "ouster (packets)";
+  return "-";
+}
+
+void inspect_bag(const fs::path& path) {
+  // A bag whose recording was killed has no index: read what the chunks hold, and say so.
+  std::optional<io::rosbag::BagReader> bag;
+  std::string index_note = "intact";
+  try {
+    bag.emplace(path);
+  } catch (const FormatError& e) {
+    io::rosbag::BagReader::Options options;
+    options.recover = true;
+    bag.emplace(path, options);
+    index_note = fmt::format("damaged, rebuilt by scanning the chunks ({})", e.what());
+  }
+  const auto compressions = bag->chunk_compressions();
+  std::string chunks;
+  for (const auto& [name, n] : compressions) {
+    chunks += fmt::format("{}{} {}", chunks.empty() ? "" : ", ", name, n);
+  }
+  fmt::print("  format      ROS1 bag 2.0, {} chunks ({}), index {}\n", bag->chunk_count(),
+             chunks.empty() ? "none" : chunks, index_note);
+  const auto start = bag->start_time_ns();
+  const auto end = bag->end_time_ns();
+  fmt::print("  messages    {}", bag->message_count());
+  if (start && end) fmt::print(" over {}", time_span(*start, *end));
+  fmt::print("\n  connections {}\n", bag->connections().size());
+  const auto topics = bag->topics();
+  if (topics.empty()) return;
+  const double span_s = start && end ? static_cast<double>(*end - *start) * 1e-9 : 0.0;
+  std::size_t topic_width = 5;
+  std::size_t type_width = 4;
+  for (const auto& t : topics) {
+    topic_width = std::max(topic_width, t.topic.size());
+    type_width = std::max(type_width, t.type.size());
+  }
+  fmt::print("  {:<{}}  {:>9}  {:>9}  {:<{}}  {}\n", "topic", topic_width, "messages", "mean Hz",
+             "type", type_width, "livod replays it as");
+  for (const auto& t : topics) {
+    // The mean rate over the whole bag (a topic's own span would need a pass over the data).
+    const std::string rate =
+        span_s > 0.0 ? fmt::format("{:.2f}", static_cast<double>(t.message_count) / span_s) : "-";
+    std::string type = t.type;
+    if (t.connection_count > 1) type += fmt::format(" ({} connections)", t.connection_count);
+    fmt::print("  {:<{}}  {:>9}  {:>9}  {:<{}}  {}\n", t.topic, topic_width, t.message_count, rate,
+               type, type_width, replayed_as(t.type));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 
 struct Inspector {
   const char* name;
@@ -282,6 +356,7 @@ struct Inspector {
 // First match wins. Recognisers look only at the first kHeadBytes bytes.
 constexpr std::array kInspectors = {
     Inspector{"pcap/pcapng", is_capture, inspect_capture},
+    Inspector{"ROS1 bag", is_bag, inspect_bag},
     Inspector{"candump log", is_candump, inspect_candump},
 };
 
@@ -315,7 +390,8 @@ bool inspect_file(const fs::path& path) {
 void add_inspect_command(CLI::App& app, CommandContext& ctx) {
   auto files = std::make_shared<std::vector<std::string>>();
   auto* cmd = app.add_subcommand(
-      "inspect", "Show what recorded files contain (pcap/pcapng captures, candump logs)");
+      "inspect",
+      "Show what recorded files contain (pcap/pcapng captures, ROS1 bags, candump logs)");
   cmd->add_option("FILE", *files, "files to inspect")->required()->check(CLI::ExistingFile);
   cmd->callback([files, &ctx] {
     bool all_ok = true;

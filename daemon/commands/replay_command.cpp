@@ -1,5 +1,6 @@
 // `livod replay --config CONFIG.yaml -o OUTDIR [--realtime] [NAME=PATH | PATH]...`: replays
-// recordings (pcap, candump logs, ROS1 bags) through the decoders, clock domains and LIO estimator
+// recordings (pcap, candump logs, ROS1 bags, image folders) through the decoders, clock domains and
+// the estimator (LIO, and VIO with a camera)
 // - as fast as possible, single-threaded and deterministic (default): OUTDIR/trajectory.txt (TUM),
 //   map.pcd, timing.txt, timing.json and frames.csv (docs/replay.md);
 // - or --realtime: at the recorded pace through the daemon's threads and rings (the runtime of
@@ -44,6 +45,7 @@ struct ReplayArgs {
   std::size_t map_max_points = 2'000'000;
   bool realtime = false;
   bool accept_partial_input = false;
+  std::string debug_images;
 };
 
 // Everything the console must say about map.pcd that the numbers alone would hide: an empty map,
@@ -115,6 +117,15 @@ void print_result(const replay::ReplayResult& r) {
   if (s.degenerate_frames > 0) {
     fmt::print("degenerate frames: {} (see frames.csv)\n", s.degenerate_frames);
   }
+  if (s.vio_ms.count > 0) {
+    fmt::print(
+        "visual update: {} of {} images updated the state; per image p50 {:.2f} ms, p99 {:.2f} ms "
+        "(pyramid {:.2f}, selection {:.2f}, update {:.2f}, map {:.2f} ms p50); {} patches p50; "
+        "visual map {} points\n",
+        s.counters.vio_updates, s.counters.images_in, s.vio_ms.p50, s.vio_ms.p99,
+        s.vio_pyramid_ms.p50, s.vio_selection_ms.p50, s.vio_update_ms.p50, s.vio_map_ms.p50,
+        s.vio_patches.p50, s.visual_map.points);
+  }
   if (s.frames == 0) {
     fmt::print("no pose was estimated: IMU initialisation {}; scans in {}, before init {}\n",
                s.init_status, s.counters.scans_in, s.counters.scans_before_init);
@@ -164,13 +175,8 @@ int run_realtime(const LivodConfig& config, const ReplayArgs& args) {
 }
 
 int run(const ReplayArgs& args) {
-  ConfigResult loaded = load_config(args.config);
-  if (loaded.ok()) {
-    // The same file checks as check-config; the recordings are opened by the replay itself.
-    for (auto& p : check_config_files(loaded.config, /*open_recordings=*/false)) {
-      loaded.problems.push_back(std::move(p));
-    }
-  }
+  // The same file checks as check-config (recordings are opened by the run itself).
+  ConfigResult loaded = load_checked_config(args.config, /*open_recordings=*/false);
   for (const auto& problem : loaded.problems) {
     fmt::print(stderr, "{}\n", format_problem(loaded.source, problem));
   }
@@ -180,6 +186,10 @@ int run(const ReplayArgs& args) {
     return kExitFailure;
   }
   if (args.realtime) {
+    if (!args.debug_images.empty()) {
+      fmt::print(stderr, "livod replay: --debug-images is written by the fast replay only\n");
+      return kExitFailure;
+    }
     try {
       return run_realtime(loaded.config, args);
     } catch (const std::exception& e) {
@@ -195,6 +205,7 @@ int run(const ReplayArgs& args) {
   options.threads = args.threads;
   options.map_cell_m = args.map_cell_m;
   options.map_max_points = args.map_max_points;
+  options.debug_images_dir = args.debug_images;
   try {
     const replay::ReplayResult result = replay::run_replay(loaded.config, options);
     for (const auto& note : result.notes) fmt::print(stderr, "livod replay: note: {}\n", note);
@@ -240,6 +251,9 @@ void add_replay_command(CLI::App& app, CommandContext& ctx) {
                   "Estimator threads (default: the configuration's estimator.threads, 0 = one per "
                   "core); the trajectory is the same for any value")
       ->check(CLI::Range(0, 256));
+  cmd->add_option("--debug-images", args->debug_images,
+                  "Write every image of the visual update with its patches drawn to this folder "
+                  "(created; off by default)");
   cmd->add_option("--map-cell", args->map_cell_m, "map.pcd voxel filter cell (m)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

@@ -33,13 +33,8 @@ struct RunArgs {
 };
 
 int run(const RunArgs& args, const CLI::App& root) {
-  ConfigResult loaded = load_config(args.config);
-  if (loaded.ok()) {
-    // The same file checks as check-config (metadata, calibration files), before any socket.
-    for (auto& p : check_config_files(loaded.config, /*open_recordings=*/false)) {
-      loaded.problems.push_back(std::move(p));
-    }
-  }
+  // The same file checks as check-config (recordings are opened by the run itself).
+  ConfigResult loaded = load_checked_config(args.config, /*open_recordings=*/false);
   for (const auto& problem : loaded.problems) {
     fmt::print(stderr, "{}\n", format_problem(loaded.source, problem));
   }
@@ -59,6 +54,7 @@ int run(const RunArgs& args, const CLI::App& root) {
     runtime::DaemonOptions options;
     options.bus = bus.get();
     options.threads = args.threads;
+    options.notify_systemd = true;  // READY/STATUS/WATCHDOG/STOPPING when run by systemd
     const runtime::DaemonResult r = runtime::run_daemon(config, options);
     for (const auto& s : r.sensor_summaries) spdlog::info("{}", s);
     const auto& p = r.publisher;

@@ -371,16 +371,29 @@ void check_camera_sizes(ProblemList& problems, const LivodConfig& config,
 void check_implemented(ProblemList& problems, const LivodConfig& config,
                        const std::vector<SensorSite>& sites) {
   int first_lidar = -1;
+  int first_camera = -1;
   for (std::size_t i = 0; i < sites.size(); ++i) {
     const SensorConfig& s = config.sensors[i];
     if (!sites[i].driver_known || !s.enabled) continue;
     const std::string where = sensor_label(sites, config, i);
     switch (sensor_kind(s.driver)) {
       case SensorKind::camera:
-        problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
-                       where + ": the estimator has no visual update yet, so a camera would be " +
-                           "ignored; set 'enabled: false' to keep its calibration in the file");
-        continue;
+        // The visual update takes one camera. A live camera source is refused below; replayed
+        // frames (source.replay: image folders, bag image topics) are what runs today.
+        if (!config.estimator.vio.enabled) {
+          problems.warning(ProblemKind::inconsistent, sites[i].path + ".enabled", sites[i].at,
+                           where + " is not used: estimator.vio.enabled is false (LiDAR-inertial " +
+                               "odometry only)");
+        } else if (first_camera >= 0) {
+          problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
+                         where + " and " +
+                             sensor_label(sites, config, static_cast<std::size_t>(first_camera)) +
+                             " are both enabled, but the visual update uses one camera: disable "
+                             "one");
+        } else {
+          first_camera = static_cast<int>(i);
+        }
+        break;
       case SensorKind::lidar:
         if (first_lidar >= 0) {
           problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
@@ -400,14 +413,17 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
         }
         break;
     }
+    // drivers/imu has the live SocketCAN and serial/USB sources and their decoders
+    // (daemon/devices), but the runtime does not start them yet: `livod run` would fail at open.
     if (s.driver == Driver::serial_imu) {
       problems.error(ProblemKind::not_implemented, sites[i].path + ".driver", sites[i].at,
-                     where + ": no serial IMU protocol is implemented yet");
+                     where + ": serial IMUs cannot be run yet: `livod run` has no live serial " +
+                         "IMU source and `livod replay` cannot read serial captures");
     } else if (sites[i].source_ok && std::holds_alternative<DeviceSourceConfig>(s.source)) {
       problems.error(ProblemKind::not_implemented, sites[i].path + ".source", sites[i].at,
-                     where + ": live " + std::string(enum_name(s.driver)) +
-                         " devices are not supported yet (a recording of it can be replayed: " +
-                         "source.replay)");
+                     where + ": `livod run` does not start live " +
+                         std::string(enum_name(s.driver)) +
+                         " devices yet (a recording of it can be replayed: source.replay)");
     }
   }
 }

@@ -10,6 +10,7 @@ SensorKind sensor_kind(Driver driver) {
     case Driver::velodyne:
     case Driver::livox_sdk1:
     case Driver::livox_sdk2:
+    case Driver::hesai:
     case Driver::dataset_lidar:
       return SensorKind::lidar;
     case Driver::v4l2:
@@ -25,8 +26,7 @@ SensorKind sensor_kind(Driver driver) {
 }
 
 bool is_packet_lidar(Driver driver) {
-  return driver == Driver::ouster || driver == Driver::velodyne || driver == Driver::livox_sdk1 ||
-         driver == Driver::livox_sdk2;
+  return drivers::find_family(enum_name(driver)) != nullptr;
 }
 
 const SensorConfig* LivodConfig::find_sensor(std::string_view name) const {
@@ -38,11 +38,12 @@ const SensorConfig* LivodConfig::find_sensor(std::string_view name) const {
 
 namespace {
 
-constexpr std::array<EnumEntry<Driver>, 11> kDrivers{{
+constexpr std::array<EnumEntry<Driver>, 12> kDrivers{{
     {"ouster", Driver::ouster},
     {"velodyne", Driver::velodyne},
     {"livox_sdk1", Driver::livox_sdk1},
     {"livox_sdk2", Driver::livox_sdk2},
+    {"hesai", Driver::hesai},
     {"v4l2", Driver::v4l2},
     {"aravis", Driver::aravis},
     {"can_imu", Driver::can_imu},

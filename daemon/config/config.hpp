@@ -15,6 +15,7 @@
 #include <variant>
 #include <vector>
 
+#include "drivers/lidar_family.hpp"
 #include "estimator/params.hpp"
 
 namespace livod::daemon {
@@ -26,6 +27,7 @@ enum class Driver {
   velodyne,
   livox_sdk1,
   livox_sdk2,
+  hesai,
   v4l2,
   aravis,
   can_imu,
@@ -41,14 +43,9 @@ SensorKind sensor_kind(Driver driver);
 // LiDARs decoded from their UDP packets (as opposed to decoded point clouds from a recording).
 bool is_packet_lidar(Driver driver);
 
-// Which local UDP ports a sensor's streams arrive on; 0 = the driver has no such stream.
-struct UdpPorts {
-  std::uint16_t lidar = 0;     // point packets
-  std::uint16_t imu = 0;       // internal IMU (Ouster, Livox; may equal lidar)
-  std::uint16_t position = 0;  // Velodyne position/telemetry packets
-  std::uint16_t command = 0;   // Livox host command/control port
-  std::uint16_t push = 0;      // Livox SDK2 status push port
-};
+// Which local UDP ports a sensor's streams arrive on; 0 = the driver has no such stream (the
+// LiDAR families' tables give the defaults: drivers/lidar_family.hpp).
+using UdpPorts = drivers::UdpPorts;
 
 struct UdpSourceConfig {
   std::string bind_address = "0.0.0.0";
@@ -108,6 +105,9 @@ struct InternalImuConfig {
 };
 
 enum class CameraModel { pinhole, equidistant };
+enum class CameraPixelFormat { mono8, mono16, bgr8 };
+enum class CameraTimestamp { automatic, start_of_exposure, end_of_frame };
+enum class CameraTrigger { free_run, software, hardware };
 
 struct CameraConfig {
   CameraModel model = CameraModel::pinhole;
@@ -120,6 +120,20 @@ struct CameraConfig {
   std::optional<double> exposure_s;     // fixed exposure; unset = leave the camera's setting
   std::optional<double> frame_rate_hz;  // unset = leave the camera's setting
   int decimation = 1;                   // keep every n-th frame
+
+  // Live capture (v4l2, aravis; docs/drivers/camera.md).
+  CameraPixelFormat pixel_format = CameraPixelFormat::mono8;
+  std::optional<double> gain;  // camera units (GenICam: usually dB; V4L2: driver units)
+  int buffers = 0;             // driver buffers; 0 = the driver's default (V4L2 4, Aravis 8)
+  CameraTimestamp timestamp = CameraTimestamp::automatic;  // which instant the stamps mark
+  double readout_s = 0.0;  // end-of-frame stamps: end of exposure -> stamp (readout + transfer)
+  std::vector<std::string> v4l2_formats;  // v4l2: wire formats (fourcc) to ask for, best first
+  CameraTrigger trigger = CameraTrigger::free_run;  // aravis
+  std::string trigger_line = "Line1";               // aravis, hardware trigger input
+  int packet_size = 0;                              // aravis GigE: 0 = negotiate
+  bool packet_resend = true;                        // aravis GigE
+  bool ptp = false;                                 // aravis: enable IEEE 1588 in the camera
+  bool chunk_exposure = true;                       // aravis: per-frame exposure from chunks
 };
 
 enum class CanDecoder { bosch_mm7, sbg, custom };
@@ -150,6 +164,7 @@ struct CanConfig {
   SbgCanIds sbg_ids;
   std::vector<CanSignal> signals;  // custom: exactly one per quantity
   std::uint32_t sample_id = 0;     // custom: the frame whose arrival completes a sample
+  bool fd_frames = false;          // live: also receive CAN FD frames
 };
 
 enum class SerialProtocol { xsens_mtdata2, vectornav_binary };
@@ -176,11 +191,12 @@ struct DatasetConfig {
 struct SensorConfig {
   std::string name;
   Driver driver = Driver::ouster;
-  std::string model;  // canonical spelling for LiDARs (e.g. "OS1-64", "VLP-16", "MID-360")
+  std::string model;  // canonical spelling for LiDARs (e.g. "OS1-64", "VLP-16", "PANDARXT32")
   bool enabled = true;
   SourceConfig source;
-  std::filesystem::path metadata;     // ouster: metadata JSON (empty = fetch over HTTP)
-  std::filesystem::path calibration;  // velodyne: calibration XML/YAML (empty = built-in)
+  std::filesystem::path metadata;         // ouster: metadata JSON (empty = fetch over HTTP)
+  std::filesystem::path calibration;      // velodyne: XML/YAML (empty = built-in); hesai: angle CSV
+  drivers::LidarSettings lidar_settings;  // the LiDAR family's own section (velodyne:, hesai:)
   FrameCutConfig frame_cut;
   std::optional<ExtrinsicConfig> extrinsic;
   // Resolved through relative_to chains; identity for the body IMU (and for its LiDAR when the

@@ -1,11 +1,99 @@
 // Reads `camera:` of a camera sensor: projection model, size, intrinsics and distortion, and the
-// capture settings livod applies.
+// capture settings livod applies (docs/drivers/camera.md).
+
+#include <array>
+#include <string_view>
 
 #include "daemon/config/readers.hpp"
 
 namespace livod::daemon::config_detail {
 
-void read_camera(MapReader& c, CameraConfig& camera, bool& ok) {
+namespace {
+
+template <class E>
+struct Name {
+  std::string_view name;
+  E value;
+};
+
+constexpr std::array<Name<CameraPixelFormat>, 3> kPixelFormats{{
+    {"mono8", CameraPixelFormat::mono8},
+    {"mono16", CameraPixelFormat::mono16},
+    {"bgr8", CameraPixelFormat::bgr8},
+}};
+constexpr std::array<Name<CameraTimestamp>, 3> kTimestamps{{
+    {"auto", CameraTimestamp::automatic},
+    {"start_of_exposure", CameraTimestamp::start_of_exposure},
+    {"end_of_frame", CameraTimestamp::end_of_frame},
+}};
+constexpr std::array<Name<CameraTrigger>, 3> kTriggers{{
+    {"free_run", CameraTrigger::free_run},
+    {"software", CameraTrigger::software},
+    {"hardware", CameraTrigger::hardware},
+}};
+
+template <class E, std::size_t N>
+bool read_name(MapReader& m, std::string_view key, const std::array<Name<E>, N>& names, E& out) {
+  const auto v = m.take(key);
+  if (!v || v->node.IsNull()) return false;
+  const auto text = parse_string(m.problems(), *v);
+  if (!text) return false;
+  std::vector<std::string> all;
+  for (const auto& n : names) {
+    if (n.name == *text) {
+      out = n.value;
+      return true;
+    }
+    all.emplace_back(n.name);
+  }
+  m.problems().error(ProblemKind::invalid_value, v->path, v->at,
+                     "'" + *text + "' is not one of: " + join(all) + did_you_mean(*text, all));
+  return false;
+}
+
+// A V4L2 fourcc as written in the file: 1-4 printable characters ("GREY", "MJPG", "Y16").
+bool valid_fourcc(const std::string& s) {
+  if (s.empty() || s.size() > 4) return false;
+  for (const char c : s) {
+    if (c < 0x21 || c > 0x7E) return false;
+  }
+  return true;
+}
+
+void read_v4l2(MapReader& v, CameraConfig& camera) {
+  if (const auto f = v.take("formats"); f && !f->node.IsNull()) {
+    for (const auto& item : sequence_items(v.problems(), *f)) {
+      const auto s = parse_string(v.problems(), item);
+      if (!s) continue;
+      if (!valid_fourcc(*s)) {
+        v.problems().error(ProblemKind::invalid_value, item.path, item.at,
+                           "'" + *s + "' is not a fourcc (e.g. GREY, Y16, YUYV, MJPG, BGR3)");
+        continue;
+      }
+      camera.v4l2_formats.push_back(*s);
+    }
+  }
+  v.finish();
+}
+
+void read_aravis(MapReader& a, CameraConfig& camera) {
+  read_name(a, "trigger", kTriggers, camera.trigger);
+  a.read("trigger_line", camera.trigger_line);
+  a.read("packet_size", camera.packet_size, 0, 65535);
+  if (camera.packet_size != 0 && camera.packet_size < 576) {
+    a.problems().error(ProblemKind::out_of_range, a.child_path("packet_size"),
+                       a.key_at("packet_size"),
+                       "a GigE Vision packet is at least 576 bytes (0 negotiates it)");
+  }
+  a.read("packet_resend", camera.packet_resend);
+  a.read("ptp", camera.ptp);
+  a.read("chunk_exposure", camera.chunk_exposure);
+  a.finish();
+}
+
+}  // namespace
+
+void read_camera(MapReader& c, Driver driver, CameraConfig& camera, bool& ok) {
   ProblemList& problems = c.problems();
   constexpr long long kMaxImageSide_px = 20000;
   ok = true;
@@ -84,6 +172,56 @@ void read_camera(MapReader& c, CameraConfig& camera, bool& ok) {
   c.read_optional("exposure_s", camera.exposure_s, left_open(0.0, 1.0));
   c.read_optional("frame_rate_hz", camera.frame_rate_hz, left_open(0.0, 1000.0));
   c.read("decimation", camera.decimation, 1, 1000);
+
+  // Capture settings of live cameras.
+  const bool live = driver == Driver::v4l2 || driver == Driver::aravis;
+  const char* live_only = "applies to live cameras (v4l2, aravis) only";
+  for (const char* key : {"pixel_format", "gain", "buffers", "timestamp", "readout_s"}) {
+    if (!live && c.has(key)) {
+      problems.error(ProblemKind::inconsistent, c.child_path(key), c.key_at(key),
+                     std::string("'") + key + "' " + live_only);
+    }
+  }
+  if (live) {
+    read_name(c, "pixel_format", kPixelFormats, camera.pixel_format);
+    c.read_optional("gain", camera.gain, closed(-1000.0, 1000.0));
+    c.read("buffers", camera.buffers, 2, 64);
+    read_name(c, "timestamp", kTimestamps, camera.timestamp);
+    c.read("readout_s", camera.readout_s, closed(0.0, 1.0));
+    if (camera.readout_s > 0.0 && camera.timestamp == CameraTimestamp::start_of_exposure) {
+      problems.warning(ProblemKind::inconsistent, c.child_path("readout_s"), c.key_at("readout_s"),
+                       "ignored: start-of-exposure stamps need no readout correction");
+    }
+  }
+  if (const auto v = c.take("v4l2"); v && !v->node.IsNull()) {
+    if (driver != Driver::v4l2) {
+      problems.error(ProblemKind::inconsistent, v->path, v->at,
+                     "'v4l2' applies to v4l2 cameras only");
+    } else {
+      MapReader r(problems, v->node, v->path, v->at);
+      read_v4l2(r, camera);
+    }
+  }
+  if (const auto v = c.take("aravis"); v && !v->node.IsNull()) {
+    if (driver != Driver::aravis) {
+      problems.error(ProblemKind::inconsistent, v->path, v->at,
+                     "'aravis' applies to aravis cameras only");
+    } else {
+      MapReader r(problems, v->node, v->path, v->at);
+      read_aravis(r, camera);
+      if (camera.trigger == CameraTrigger::software && !camera.frame_rate_hz) {
+        problems.error(ProblemKind::missing_key, c.child_path("frame_rate_hz"), v->at,
+                       "a software-triggered camera needs frame_rate_hz: livod fires the "
+                       "triggers at that rate");
+      }
+    }
+  }
+  if (camera.timestamp == CameraTimestamp::automatic && driver == Driver::aravis &&
+      camera.readout_s > 0.0) {
+    problems.warning(ProblemKind::inconsistent, c.child_path("readout_s"), c.key_at("readout_s"),
+                     "ignored: GenICam cameras are taken to stamp the start of exposure unless "
+                     "timestamp: end_of_frame is set");
+  }
   c.finish();
 }
 

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "daemon/config/readers.hpp"
+#include "drivers/imu/can_signal.hpp"
 
 namespace livod::daemon::config_detail {
 
@@ -48,13 +49,23 @@ std::optional<CanSignal> read_signal(ProblemList& problems, const Value& item) {
   if (start_bit && bits) {
     signal.start_bit = static_cast<int>(*start_bit);
     signal.length = static_cast<int>(*bits);
-    // Intel (little-endian) signals grow upwards from start_bit; Motorola ones are checked by
-    // the decoder, whose bit numbering they follow.
+    // Intel (little-endian) signals grow upwards from start_bit; Motorola (big-endian) ones run
+    // down from their most significant bit through the following bytes (DBC numbering, as the
+    // decoder reads them: drivers/imu/can_signal.hpp).
     if (!signal.big_endian && *start_bit + *bits > kFrameBits) {
       problems.error(ProblemKind::out_of_range, length->path, length->at,
                      "start_bit + length = " + std::to_string(*start_bit + *bits) +
                          " is beyond the 64 bits of a CAN frame");
       ok = false;
+    } else if (signal.big_endian) {
+      const imu::CanBitField field{signal.start_bit, signal.length, true, signal.is_signed};
+      if (const auto why = imu::check_bit_field(field, kFrameBits / 8); !why.empty()) {
+        problems.error(ProblemKind::out_of_range, length->path, length->at,
+                       why + " (start_bit " + std::to_string(*start_bit) +
+                           " is the most "
+                           "significant bit, DBC numbering)");
+        ok = false;
+      }
     }
   }
   if (s.read("factor", signal.factor, closed(-1e9, 1e9)) && signal.factor == 0.0) {
@@ -98,6 +109,7 @@ void read_can(MapReader& c, CanConfig& can) {
   const auto ids = c.take("ids");
   const auto signals = c.take("signals");
   const auto sample_id = c.take("sample_id");
+  c.read("fd", can.fd_frames);
   if (!decoder) {
     c.finish();
     return;

@@ -118,11 +118,24 @@ void read_vio(MapReader& m, estimator::VioParams& vio) {
   m.read("exposure_estimate", vio.exposure_estimate);
   m.read("inv_expo_cov", vio.inv_expo_cov, left_open(0.0, 10.0));
   m.read("grid_cell_px", vio.grid_cell_px, 4, 1000);
+  m.read("huber_k", vio.huber_k, closed(0.0, 100.0));
+  m.read("min_patches", vio.min_patches, 1, 10000);
+  m.read("max_view_angle_deg", vio.max_view_angle_deg, left_open(0.0, 90.0));
+  m.read("min_corner_score", vio.min_corner_score, closed(0.0, 1e6));
   m.read("max_visual_points", vio.max_visual_points, 100, 10000000);
   m.read("max_observations", vio.max_observations, 2, 100);
+  m.read("observation_distance_m", vio.observation_distance_m, left_open(0.0, 100.0));
+  m.read("observation_angle_deg", vio.observation_angle_deg, left_open(0.0, 180.0));
+  m.read("observation_pixels", vio.observation_pixels, left_open(0.0, 10000.0));
   m.read("visual_voxel_size", vio.visual_voxel_size, closed(0.05, 10.0));
   m.read("depth_discontinuity_m", vio.depth_discontinuity_m, left_open(0.0, 100.0));
   m.read("image_timeout_s", vio.image_timeout_s, left_open(0.0, 10.0));
+  {
+    MapReader c = m.map("convergence");
+    c.read("rotation_deg", vio.convergence.rotation_deg, left_open(0.0, 1.0));
+    c.read("translation_m", vio.convergence.translation_m, left_open(0.0, 0.1));
+    c.finish();
+  }
   m.finish();
 }
 

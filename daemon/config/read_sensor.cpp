@@ -6,8 +6,10 @@
 #include <cctype>
 #include <system_error>
 
+#include "core/error.hpp"
 #include "daemon/config/readers.hpp"
 #include "daemon/config/sensor_models.hpp"
+#include "drivers/imu/serial_port.hpp"
 
 namespace livod::daemon::config_detail {
 
@@ -22,11 +24,44 @@ std::vector<std::string> names_of(const std::vector<ReplayFormat>& formats) {
   return names;
 }
 
-std::string driver_list(const std::vector<Driver>& drivers) {
+// "ouster, livox_sdk1 (AVIA, HORIZON, TELE-15), ..., velodyne HDL-32E": who has an IMU.
+std::string internal_imu_models() {
   std::string out;
-  for (auto d : drivers) {
+  for (const drivers::LidarFamily* f : drivers::lidar_families()) {
+    std::string with;
+    bool all = true;
+    for (const auto& model : f->models) {
+      if (model.internal_imu) {
+        with += (with.empty() ? "" : ", ") + std::string(model.name);
+      } else {
+        all = false;
+      }
+    }
+    if (with.empty()) continue;
+    out += (out.empty() ? "" : "; ") + std::string(f->driver) + (all ? "" : " " + with);
+  }
+  return out;
+}
+
+// " (of the velodyne models only the HDL-32E has one)", or "" when none has.
+std::string imu_models_of(const drivers::LidarFamily* family) {
+  if (family == nullptr) return {};
+  std::vector<std::string> with;
+  for (const auto& model : family->models) {
+    if (model.internal_imu) with.emplace_back(model.name);
+  }
+  if (with.empty()) return " (no " + std::string(family->driver) + " model has one)";
+  std::string list;
+  for (std::size_t i = 0; i < with.size(); ++i) list += (i == 0 ? "" : ", ") + with[i];
+  return " (of the " + std::string(family->driver) + " models only the " + list +
+         (with.size() == 1 ? " has one)" : " have one)");
+}
+
+std::string packet_lidar_drivers() {
+  std::string out;
+  for (const drivers::LidarFamily* f : drivers::lidar_families()) {
     if (!out.empty()) out += ", ";
-    out += enum_name(d);
+    out += f->driver;
   }
   return out;
 }
@@ -77,6 +112,55 @@ void check_file(ProblemList& problems, const Value& v, const std::filesystem::pa
     problems.error(ProblemKind::invalid_value, v.path, v.at,
                    std::string(what) + " '" + file.string() + "' is not a regular file");
   }
+}
+
+// A LiDAR family's own section, read by the family (drivers::LidarFamily::read_settings).
+class SectionSettings final : public drivers::SettingsReader {
+ public:
+  explicit SectionSettings(MapReader& section) : m_(section) {}
+
+  std::optional<std::array<double, 2>> degree_pair(std::string_view key) override {
+    const auto v = m_.take(key);
+    if (!v || v->node.IsNull()) return std::nullopt;
+    const auto numbers = parse_numbers(m_.problems(), *v, 2, 2, closed(0.0, 360.0));
+    if (!numbers) return std::nullopt;
+    return std::array<double, 2>{(*numbers)[0], (*numbers)[1]};
+  }
+
+  std::optional<double> number(std::string_view key, double min, double max) override {
+    std::optional<double> out;
+    m_.read_optional(key, out, closed(min, max));
+    return out;
+  }
+
+  void error(std::string_view key, const std::string& message) override {
+    m_.problems().error(ProblemKind::invalid_value, m_.child_path(key), m_.key_at(key), message);
+  }
+
+ private:
+  MapReader& m_;
+};
+
+// The families that take a file of the given kind, for messages ("velodyne and hesai sensors").
+std::string families_taking(bool (*takes)(drivers::DecoderFile)) {
+  std::vector<std::string> names;
+  for (const drivers::LidarFamily* f : drivers::lidar_families()) {
+    if (takes(f->file)) names.emplace_back(f->driver);
+  }
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    out += (i == 0 ? "" : (i + 1 == names.size() ? " and " : ", ")) + names[i];
+  }
+  return out + " sensors";
+}
+
+bool takes_calibration(drivers::DecoderFile f) {
+  return f == drivers::DecoderFile::kCalibrationOptional ||
+         f == drivers::DecoderFile::kCalibrationRequired;
+}
+
+bool takes_metadata(drivers::DecoderFile f) {
+  return f == drivers::DecoderFile::kMetadata;
 }
 
 // ---- source.udp -------------------------------------------------------------------------------
@@ -281,6 +365,14 @@ bool read_device(MapReader& d, Driver driver, DeviceSourceConfig& device) {
       const auto s = parse_string(problems, *v);
       if (s) device.path = *s;
       ok = ok && s.has_value();
+      if (s && driver == Driver::serial_imu && s->rfind("usb:", 0) == 0) {
+        try {
+          (void)imu::parse_usb_selector(*s);  // usb:VVVV:PPPP[:SERIAL] selects a libusb device
+        } catch (const Error& e) {
+          problems.error(ProblemKind::invalid_value, v->path, v->at, e.what());
+          ok = false;
+        }
+      }
     } else {
       ok = false;
     }
@@ -414,7 +506,13 @@ void read_clock(MapReader& c, ClockConfig& clock) {
 
 void read_serial(MapReader& s, SerialConfig& serial) {
   if (const auto v = s.require("protocol", "xsens_mtdata2 or vectornav_binary")) {
-    if (const auto p = parse_enum<SerialProtocol>(s.problems(), *v)) serial.protocol = *p;
+    if (const auto p = parse_enum<SerialProtocol>(s.problems(), *v)) {
+      serial.protocol = *p;
+      if (*p == SerialProtocol::vectornav_binary) {
+        s.problems().error(ProblemKind::not_implemented, v->path, v->at,
+                           "vectornav_binary is not implemented (xsens_mtdata2 is)");
+      }
+    }
   }
   if (const auto v = s.take("baud_rate"); v && !v->node.IsNull()) {
     static constexpr std::array<long long, 12> kBaudRates = {9600,    19200,   38400,   57600,
@@ -557,6 +655,9 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
     m.take("model");
     m.take("ring_capacity");
     for (const char* key : kDriverSections) m.take(key);
+    for (const drivers::LidarFamily* f : drivers::lidar_families()) {
+      if (f->read_settings != nullptr) m.take(f->driver);
+    }
     m.finish();
     return;
   }
@@ -570,17 +671,38 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
   read_source(m, *driver, sensor.model, context, sensor, site);
 
   const bool packet_lidar = is_packet_lidar(*driver);
-  if (const auto v = take_applicable(m, "metadata", *driver == Driver::ouster, "ouster sensors")) {
+  const drivers::LidarFamily* family = lidar_family(*driver);
+  const drivers::DecoderFile file = family ? family->file : drivers::DecoderFile::kNone;
+  if (const auto v =
+          take_applicable(m, "metadata", takes_metadata(file), families_taking(&takes_metadata))) {
     if (const auto s = parse_string(problems, *v, true)) {
       sensor.metadata = resolve_path(context, *s);
       check_file(problems, *v, sensor.metadata, "metadata file");
     }
   }
-  if (const auto v =
-          take_applicable(m, "calibration", *driver == Driver::velodyne, "velodyne sensors")) {
+  if (const auto v = take_applicable(m, "calibration", takes_calibration(file),
+                                     families_taking(&takes_calibration))) {
     if (const auto s = parse_string(problems, *v, true)) {
       sensor.calibration = resolve_path(context, *s);
       check_file(problems, *v, sensor.calibration, "calibration file");
+    }
+  }
+  if (file == drivers::DecoderFile::kCalibrationRequired && sensor.calibration.empty() &&
+      !m.has("calibration")) {
+    problems.error(ProblemKind::missing_key, m.child_path("calibration"), m.at(),
+                   "a " + std::string(enum_name(*driver)) +
+                       " sensor needs its angle correction file ('calibration': the CSV the "
+                       "sensor's web interface or PandarView exports; every unit differs)");
+  }
+  // The families' own sections: the sensor's family reads its own, the others are misplaced.
+  for (const drivers::LidarFamily* f : drivers::lidar_families()) {
+    if (f->read_settings == nullptr) continue;
+    if (const auto v =
+            take_applicable(m, f->driver, f == family, std::string(f->driver) + " sensors")) {
+      MapReader section(problems, v->node, v->path, v->at);
+      SectionSettings reader(section);
+      f->read_settings(reader, sensor.lidar_settings);
+      section.finish();
     }
   }
   if (*driver == Driver::ouster && sensor.metadata.empty() && site.source_ok) {
@@ -599,29 +721,23 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
   }
 
   sensor.frame_cut.mode = default_frame_cut(*driver);
-  if (const auto v = take_applicable(m, "frame_cut", packet_lidar,
-                                     "LiDARs decoded from packets (" +
-                                         driver_list({Driver::ouster, Driver::velodyne,
-                                                      Driver::livox_sdk1, Driver::livox_sdk2}) +
-                                         ")")) {
+  if (const auto v =
+          take_applicable(m, "frame_cut", packet_lidar,
+                          "LiDARs decoded from packets (" + packet_lidar_drivers() + ")")) {
     MapReader f(problems, v->node, v->path, v->at);
     read_frame_cut(f, *driver, sensor.frame_cut);
   }
 
   const bool can_have_imu = driver_has_internal_imu_models(*driver);
   sensor.imu.enabled = can_have_imu && model_has_internal_imu(*driver, sensor.model);
-  if (const auto v = take_applicable(m, "imu", can_have_imu,
-                                     "LiDARs with an internal IMU (ouster, livox_sdk1, "
-                                     "livox_sdk2, velodyne HDL-32E)")) {
+  if (const auto v = take_applicable(
+          m, "imu", can_have_imu, "LiDARs with an internal IMU (" + internal_imu_models() + ")")) {
     MapReader i(problems, v->node, v->path, v->at);
     bool enabled = sensor.imu.enabled;
     if (i.read("enabled", enabled)) {
       if (enabled && !model_has_internal_imu(*driver, sensor.model)) {
         problems.error(ProblemKind::inconsistent, i.child_path("enabled"), i.key_at("enabled"),
-                       "the " + sensor.model + " has no internal IMU" +
-                           (*driver == Driver::velodyne
-                                ? std::string(" (of the Velodynes only the HDL-32E has one)")
-                                : std::string()));
+                       "the " + sensor.model + " has no internal IMU" + imu_models_of(family));
       } else {
         sensor.imu.enabled = enabled;
       }
@@ -634,7 +750,7 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
     if (const auto v = m.require("camera", "model, size and intrinsics")) {
       site.camera_at = v->at;
       MapReader c(problems, v->node, v->path, v->at, false);
-      if (c.ok()) read_camera(c, sensor.camera, site.camera_ok);
+      if (c.ok()) read_camera(c, *driver, sensor.camera, site.camera_ok);
     }
   } else {
     take_applicable(m, "camera", false, "cameras (v4l2, aravis, dataset_camera)");

@@ -50,7 +50,7 @@ inline constexpr std::array<const char*, 5> kPortNames = {"lidar", "imu", "posit
 void read_sensor(ProblemList& problems, const Value& item, const ReadContext& context,
                  SensorConfig& sensor, SensorSite& site);
 void read_extrinsic(MapReader& reader, SensorConfig& sensor, SensorSite& site);
-void read_camera(MapReader& reader, CameraConfig& camera, bool& ok);
+void read_camera(MapReader& reader, Driver driver, CameraConfig& camera, bool& ok);
 void read_can(MapReader& reader, CanConfig& can);
 // `given` collects the keys the file set that the model defaults would otherwise choose.
 void read_estimator(MapReader& reader, estimator::EstimatorParams& params,

@@ -1,165 +1,126 @@
 #include "daemon/config/sensor_models.hpp"
 
 #include <algorithm>
-#include <cctype>
 
 namespace livod::daemon {
 
 namespace {
 
-std::string upper(std::string_view s) {
-  std::string out(s);
-  for (auto& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return out;
+FrameCutMode from_cut_mode(drivers::CutMode mode) {
+  switch (mode) {
+    case drivers::CutMode::kAzimuth:
+      return FrameCutMode::azimuth;
+    case drivers::CutMode::kTime:
+      return FrameCutMode::time;
+    case drivers::CutMode::kFrameId:
+      return FrameCutMode::frame_id;
+  }
+  return FrameCutMode::time;
 }
 
 }  // namespace
 
+const drivers::LidarFamily* lidar_family(Driver driver) {
+  return drivers::find_family(enum_name(driver));
+}
+
 std::vector<std::string> known_models(Driver driver) {
-  switch (driver) {
-    case Driver::ouster: {
-      std::vector<std::string> models;
-      for (const char* family : {"OS0", "OS1", "OS2"}) {
-        for (const char* beams : {"16", "32", "64", "128"}) {
-          models.push_back(std::string(family) + "-" + beams);
-        }
-      }
-      return models;
-    }
-    case Driver::velodyne:
-      return {"VLP-16", "VLP-32C", "HDL-32E", "VLS-128"};
-    case Driver::livox_sdk1:
-      return {"AVIA", "HORIZON", "MID-40", "MID-70", "TELE-15"};
-    case Driver::livox_sdk2:
-      return {"MID-360", "HAP"};
-    default:
-      return {};
+  std::vector<std::string> models;
+  if (const auto* family = lidar_family(driver)) {
+    for (const auto& m : family->models) models.emplace_back(m.name);
   }
+  return models;
 }
 
 bool model_required(Driver driver) {
-  // Ouster reads its model from the metadata; a configured model is only cross-checked.
-  return driver == Driver::velodyne || driver == Driver::livox_sdk1 || driver == Driver::livox_sdk2;
+  const auto* family = lidar_family(driver);
+  return family != nullptr && family->model_required;
 }
 
 std::optional<std::string> canonical_model(Driver driver, std::string_view model) {
-  const auto models = known_models(driver);
-  if (models.empty()) return std::string(model);
-  std::string wanted = upper(model);
-  // Ouster's own metadata spells the product line "OS-1-128".
-  if (driver == Driver::ouster && wanted.rfind("OS-", 0) == 0) wanted.erase(2, 1);
-  for (const auto& m : models) {
-    if (m == wanted) return m;
-  }
+  const auto* family = lidar_family(driver);
+  if (family == nullptr) return std::string(model);
+  if (const auto* m = family->find_model(model)) return std::string(m->name);
   return std::nullopt;
 }
 
 bool driver_has_internal_imu_models(Driver driver) {
-  return driver == Driver::ouster || driver == Driver::livox_sdk1 || driver == Driver::livox_sdk2 ||
-         driver == Driver::velodyne;
+  const auto* family = lidar_family(driver);
+  if (family == nullptr) return false;
+  return std::any_of(family->models.begin(), family->models.end(),
+                     [](const drivers::LidarModelInfo& m) { return m.internal_imu; });
 }
 
 bool model_has_internal_imu(Driver driver, std::string_view canonical) {
-  switch (driver) {
-    case Driver::ouster:
-    case Driver::livox_sdk2:
-      return true;
-    case Driver::livox_sdk1:
-      // Mid-40 and Mid-70 have no IMU (the IMU push-rate command is not available on them).
-      return canonical != "MID-40" && canonical != "MID-70";
-    case Driver::velodyne:
-      // Of the Velodynes only the HDL-32E sends gyro and accelerometer words (position packets).
-      return canonical == "HDL-32E";
-    default:
-      return false;
+  const auto* family = lidar_family(driver);
+  if (family == nullptr) return false;
+  const auto* m = family->find_model(canonical);
+  // A sensor that names no model (Ouster: the metadata tells) has one if every model has.
+  if (m == nullptr) {
+    return std::all_of(family->models.begin(), family->models.end(),
+                       [](const drivers::LidarModelInfo& x) { return x.internal_imu; });
   }
+  return m->internal_imu;
 }
 
 UdpPorts default_ports(Driver driver, std::string_view canonical) {
-  UdpPorts ports;
-  switch (driver) {
-    case Driver::ouster:
-      ports.lidar = 7502;
-      ports.imu = 7503;
-      break;
-    case Driver::velodyne:
-      ports.lidar = 2368;
-      ports.position = 8308;
-      break;
-    case Driver::livox_sdk1:
-      // Livox-SDK's choice for the first device: data and IMU share one port.
-      ports.lidar = 56001;
-      ports.imu = 56001;
-      ports.command = 55501;
-      break;
-    case Driver::livox_sdk2:
-      if (canonical == "HAP") {
-        ports.command = 56000;
-        ports.lidar = 57000;
-        ports.imu = 58000;
-      } else {
-        ports.command = 56101;
-        ports.push = 56201;
-        ports.lidar = 56301;
-        ports.imu = 56401;
-      }
-      break;
-    default:
-      break;
-  }
-  return ports;
+  const auto* family = lidar_family(driver);
+  if (family == nullptr) return {};
+  const auto* m = family->find_model(canonical);
+  return m != nullptr ? m->ports : family->models.front().ports;
 }
 
 std::vector<std::string> port_names(Driver driver) {
-  switch (driver) {
-    case Driver::ouster:
-      return {"lidar", "imu"};
-    case Driver::velodyne:
-      return {"lidar", "position"};
-    case Driver::livox_sdk1:
-      return {"lidar", "imu", "command"};
-    case Driver::livox_sdk2:
-      return {"lidar", "imu", "command", "push"};
-    default:
-      return {};
+  std::vector<std::string> names;
+  if (const auto* family = lidar_family(driver)) {
+    for (const auto n : family->port_names) names.emplace_back(n);
   }
+  return names;
 }
 
 FrameCutMode default_frame_cut(Driver driver) {
-  switch (driver) {
-    case Driver::ouster:
-      return FrameCutMode::frame_id;
-    case Driver::velodyne:
-      return FrameCutMode::azimuth;
-    default:
-      return FrameCutMode::time;
-  }
+  const auto* family = lidar_family(driver);
+  return family != nullptr ? from_cut_mode(family->default_cut()) : FrameCutMode::time;
 }
 
 std::vector<FrameCutMode> allowed_frame_cuts(Driver driver) {
-  switch (driver) {
-    case Driver::ouster:
-      // The Ouster decoder cuts at the sensor's own frame boundaries only; an azimuth or time cut
-      // would be accepted here and refused by the run.
-      return {FrameCutMode::frame_id};
-    case Driver::velodyne:
-      return {FrameCutMode::azimuth, FrameCutMode::time};
-    case Driver::livox_sdk1:
-    case Driver::livox_sdk2:
-      // Non-repetitive scan patterns have no azimuth wrap and no frame counter.
-      return {FrameCutMode::time};
-    default:
-      return {};
+  std::vector<FrameCutMode> modes;
+  if (const auto* family = lidar_family(driver)) {
+    for (const auto m : family->cut_modes) modes.push_back(from_cut_mode(m));
   }
+  return modes;
+}
+
+drivers::CutMode to_cut_mode(FrameCutMode mode) {
+  switch (mode) {
+    case FrameCutMode::azimuth:
+      return drivers::CutMode::kAzimuth;
+    case FrameCutMode::time:
+      return drivers::CutMode::kTime;
+    case FrameCutMode::frame_id:
+      return drivers::CutMode::kFrameId;
+  }
+  return drivers::CutMode::kTime;
+}
+
+drivers::LidarDecoderConfig decoder_config(const SensorConfig& sensor) {
+  drivers::LidarDecoderConfig config;
+  const auto* family = lidar_family(sensor.driver);
+  // A sensor that names no model (an Ouster: its metadata does) takes the family's first entry.
+  config.model = !sensor.model.empty() || family == nullptr
+                     ? sensor.model
+                     : std::string(family->models.front().name);
+  if (!sensor.calibration.empty()) config.calibration = sensor.calibration;
+  if (!sensor.metadata.empty()) config.metadata = sensor.metadata;
+  config.cut = drivers::FrameCut{to_cut_mode(sensor.frame_cut.mode), sensor.frame_cut.azimuth_deg,
+                                 sensor.frame_cut.period_s};
+  config.settings = sensor.lidar_settings;
+  return config;
 }
 
 std::vector<ReplayFormat> replay_formats(Driver driver) {
+  if (lidar_family(driver) != nullptr) return {ReplayFormat::pcap, ReplayFormat::rosbag1};
   switch (driver) {
-    case Driver::ouster:
-    case Driver::velodyne:
-    case Driver::livox_sdk1:
-    case Driver::livox_sdk2:
-      return {ReplayFormat::pcap, ReplayFormat::rosbag1};
     case Driver::v4l2:
     case Driver::aravis:
     case Driver::dataset_camera:
@@ -169,10 +130,9 @@ std::vector<ReplayFormat> replay_formats(Driver driver) {
       return {ReplayFormat::candump, ReplayFormat::rosbag1};
     case Driver::dataset_lidar:
       return {ReplayFormat::rosbag1};
-    case Driver::serial_imu:
+    default:
       return {};
   }
-  return {};
 }
 
 bool supports_udp(Driver driver) {

@@ -1,7 +1,7 @@
 #pragma once
-// What the configuration needs to know about each driver and model: the model names it accepts,
-// factory UDP ports, whether the model has an internal IMU, how its scans may be cut and which
-// recorded formats carry its data. Facts from docs/sensor-protocols.md.
+// What the configuration needs to know about each driver: for the LiDARs decoded from packets
+// this is their family's descriptor (drivers/lidar_family.hpp: models and aliases, ports, internal
+// IMU, frame cuts, files, section); the camera, IMU and dataset drivers are described here.
 
 #include <optional>
 #include <string>
@@ -9,8 +9,12 @@
 #include <vector>
 
 #include "daemon/config/config.hpp"
+#include "drivers/lidar_family.hpp"
 
 namespace livod::daemon {
+
+// The family of a driver that decodes LiDAR packets; nullptr for every other driver.
+const drivers::LidarFamily* lidar_family(Driver driver);
 
 // Canonical model names the driver accepts; empty = free text (cameras, IMUs, datasets).
 std::vector<std::string> known_models(Driver driver);
@@ -20,8 +24,8 @@ std::optional<std::string> canonical_model(Driver driver, std::string_view model
 
 // Drivers with at least one model that has an internal IMU: their sensors take an `imu` section.
 bool driver_has_internal_imu_models(Driver driver);
-// The internal IMUs: Ouster (all), Livox SDK2 (all), Livox SDK1 except Mid-40/Mid-70, and the
-// Velodyne HDL-32E (gyros and accelerometers in its position packets, on the position port).
+// Whether the model has an internal IMU (the family tables: Ouster all, Livox all but Mid-40 and
+// Mid-70, the Velodyne HDL-32E in its position packets).
 bool model_has_internal_imu(Driver driver, std::string_view canonical);
 // Factory host ports of the first unit of this model.
 UdpPorts default_ports(Driver driver, std::string_view canonical);
@@ -30,6 +34,10 @@ std::vector<std::string> port_names(Driver driver);
 
 FrameCutMode default_frame_cut(Driver driver);
 std::vector<FrameCutMode> allowed_frame_cuts(Driver driver);
+drivers::CutMode to_cut_mode(FrameCutMode mode);
+
+// What the family's decoder factory takes for this sensor (model, files, frame cut, section).
+drivers::LidarDecoderConfig decoder_config(const SensorConfig& sensor);
 
 std::vector<ReplayFormat> replay_formats(Driver driver);
 bool supports_udp(Driver driver);

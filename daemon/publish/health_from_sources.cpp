@@ -21,13 +21,13 @@ int severity(SensorState s) {
 
 }  // namespace
 
-SensorState sensor_state(drivers::StreamState state) {
+SensorState sensor_state(drivers::capture::StreamState state) {
   switch (state) {
-    case drivers::StreamState::kWaiting:
+    case drivers::capture::StreamState::kWaiting:
       return SensorState::kWaiting;
-    case drivers::StreamState::kStreaming:
+    case drivers::capture::StreamState::kStreaming:
       return SensorState::kStreaming;
-    case drivers::StreamState::kStale:
+    case drivers::capture::StreamState::kStale:
       return SensorState::kStale;
   }
   return SensorState::kStale;
@@ -45,8 +45,9 @@ ClockQuality clock_quality(SyncQuality quality) {
   return ClockQuality::kLost;
 }
 
-SensorHealthRecord sensor_health_record(const drivers::SourceHealth& source, std::string kind,
-                                        const ClockDomainStats* clock, const SensorRates& rates) {
+SensorHealthRecord sensor_health_record(const drivers::capture::SourceHealth& source,
+                                        std::string kind, const ClockDomainStats* clock,
+                                        const SensorRates& rates) {
   SensorHealthRecord r;
   r.name = source.name;
   r.kind = std::move(kind);
@@ -56,7 +57,7 @@ SensorHealthRecord sensor_health_record(const drivers::SourceHealth& source, std
   r.scans_per_s = rates.scans_per_s;
 
   bool first = true;
-  for (const drivers::StreamHealth& s : source.streams) {
+  for (const drivers::capture::StreamHealth& s : source.streams) {
     StreamHealthRecord st;
     st.name = s.name;
     st.state = sensor_state(s.state);

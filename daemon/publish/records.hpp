@@ -66,7 +66,7 @@ struct TimeBase {
 
 // ---- health (built once per health period, off the hot paths) ----------------------------------
 
-// WAITING / STREAMING / STALE (livod.sensor_health_t.STATE_*), as drivers::StreamState.
+// WAITING / STREAMING / STALE (livod.sensor_health_t.STATE_*), as drivers::capture::StreamState.
 enum class SensorState : std::uint8_t { kWaiting, kStreaming, kStale };
 // livod.sensor_health_t.CLOCK_*, as livod::SyncQuality.
 enum class ClockQuality : std::uint8_t { kCoarse, kFine, kLost };

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "daemon/replay/cloud_conversion.hpp"
 #include "daemon/replay/source_kinds.hpp"
 #include "io/rosbag/bag_reader.hpp"
@@ -14,8 +15,6 @@ namespace livod::daemon::replay {
 namespace {
 
 namespace rb = io::rosbag;
-
-constexpr double kStandardGravity = 9.80665;  // m/s^2 per g
 
 // The cursor over one topic and the message it has read ahead.
 class BagTopic {

@@ -1,9 +1,10 @@
 #pragma once
-// SensorConfig -> the family's LidarDecoder, honouring the configured frame cut. (The model
-// registry in drivers/registry.hpp builds decoders with default options for `livod decode`;
-// replay needs the configuration's scan period / cut angle and metadata or calibration files.)
+// SensorConfig -> the family's LidarDecoder: the factory of the sensor's LiDAR family
+// (drivers/lidar_family.hpp) with the configuration's model, metadata or calibration file, frame
+// cut and family section (daemon::decoder_config). Used by replay, preflight and the runtime.
 
 #include <memory>
+#include <string>
 
 #include "daemon/config/config.hpp"
 #include "drivers/lidar_decoder.hpp"
@@ -11,8 +12,9 @@
 
 namespace livod::daemon::replay {
 
-// Throws livod::Error for a driver that is not a packet LiDAR, a frame cut the family's decoder
-// cannot do, unreadable metadata / calibration, or an Ouster model that the metadata contradicts.
+// Throws livod::Error (naming the sensor) for a driver that is not a packet LiDAR, a frame cut
+// the family's decoder cannot do, unreadable metadata / calibration, or an Ouster model that the
+// metadata contradicts.
 std::unique_ptr<drivers::LidarDecoder> make_lidar_decoder(const SensorConfig& sensor);
 
 // An Ouster decoder from metadata found elsewhere than sensor.metadata (a bag's metadata topic);
@@ -20,7 +22,8 @@ std::unique_ptr<drivers::LidarDecoder> make_lidar_decoder(const SensorConfig& se
 std::unique_ptr<drivers::LidarDecoder> make_ouster_decoder(
     const SensorConfig& sensor, const drivers::ouster::SensorMetadata& metadata);
 
-// Why a configured Ouster model contradicts the metadata (product line or beam count), or empty.
+// Why a configured Ouster model contradicts the metadata (product line or beam count), or empty
+// (drivers::ouster::model_mismatch).
 std::string ouster_model_mismatch(const SensorConfig& sensor,
                                   const drivers::ouster::SensorMetadata& metadata);
 

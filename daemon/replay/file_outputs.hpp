@@ -2,7 +2,10 @@
 // The replay's outputs, written synchronously on the scheduler's thread (deterministic: nothing
 // is dropped, equal inputs give equal bytes): OUTDIR/trajectory.txt (TUM), the map accumulated
 // for OUTDIR/map.pcd and the per-frame table OUTDIR/frames.csv, plus the per-frame series the
-// timing report summarises.
+// timing report summarises. With a camera the map holds the points the images saw, coloured from
+// them (FAST-LIVO2's coloured map; frames without an image add none), the visual update's
+// per-image series are kept, and with a debug folder every image is drawn with its patches
+// (debug_images.hpp).
 
 #include <cstddef>
 #include <filesystem>
@@ -26,14 +29,28 @@ struct FrameSeries {
   void summarise(ReplaySummary& summary) const;
 };
 
+// The per-image columns of the visual update (4 bytes each per image).
+struct VioSeries {
+  std::vector<float> total, pyramid, selection, update, map, patches;
+
+  void add(const estimator::vio::VioReport& v);
+  void summarise(ReplaySummary& summary) const;
+};
+
 class FileOutputs final : public runtime::OutputSink {
  public:
   struct Paths {
     std::filesystem::path trajectory;  // empty: not written
     std::filesystem::path frames_csv;  // empty: not written
   };
+  struct CameraOutputs {
+    bool colored_map = false;            // map.pcd from the coloured points of image groups
+    std::filesystem::path debug_images;  // --debug-images folder (created); empty: none
+    int patch_size = 8;                  // estimator.vio.patch_size, for the drawing
+  };
   // Creates the files (livod::Error when one cannot be created).
-  FileOutputs(const Paths& paths, double map_cell_m, std::size_t map_max_points);
+  FileOutputs(const Paths& paths, double map_cell_m, std::size_t map_max_points,
+              CameraOutputs camera);
 
   void on_frame(const runtime::FrameOutput& frame) override;
 
@@ -42,6 +59,10 @@ class FileOutputs final : public runtime::OutputSink {
 
   [[nodiscard]] const MapAccumulator& map() const { return map_; }
   [[nodiscard]] const FrameSeries& series() const { return series_; }
+  [[nodiscard]] const VioSeries& vio_series() const { return vio_series_; }
+  [[nodiscard]] bool colored_map() const { return camera_.colored_map; }
+  // The inverse exposure of the newest image that the visual update processed (1 before any).
+  [[nodiscard]] double inv_exposure() const { return inv_exposure_; }
   [[nodiscard]] std::size_t poses() const { return poses_; }
   [[nodiscard]] std::size_t map_bytes_peak() const { return map_bytes_peak_; }
 
@@ -50,6 +71,9 @@ class FileOutputs final : public runtime::OutputSink {
   std::optional<FrameTable> frames_;
   MapAccumulator map_;
   FrameSeries series_;
+  CameraOutputs camera_;
+  VioSeries vio_series_;
+  double inv_exposure_ = 1.0;
   std::size_t poses_ = 0;
   std::size_t map_bytes_peak_ = 0;
 };

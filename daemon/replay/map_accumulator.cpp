@@ -1,7 +1,8 @@
 #include "daemon/replay/map_accumulator.hpp"
 
+#include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -59,6 +60,12 @@ bool MapAccumulator::add(const Eigen::Vector3d& p) {
   return true;
 }
 
+bool MapAccumulator::add(const Eigen::Vector3d& p_world, std::uint32_t rgb) {
+  if (!add(p_world)) return false;
+  rgb_.push_back(rgb);
+  return true;
+}
+
 double MapAccumulator::grid_half_extent_m() const {
   return static_cast<double>(kCoordBias - 1) / inv_cell_;
 }
@@ -77,20 +84,24 @@ void MapAccumulator::grow() {
 }
 
 std::size_t MapAccumulator::bytes() const {
-  return xyz_.capacity() * sizeof(float) + table_.capacity() * sizeof(std::uint64_t);
+  return xyz_.capacity() * sizeof(float) + rgb_.capacity() * sizeof(std::uint32_t) +
+         table_.capacity() * sizeof(std::uint64_t);
 }
 
-void write_pcd(const std::filesystem::path& path, const std::vector<float>& xyz) {
-  const std::size_t n = xyz.size() / 3;
+void write_pcd_rgb(const std::filesystem::path& path, const std::vector<float>& xyz,
+                   const std::vector<std::uint32_t>& rgb) {
+  const std::size_t n = std::min(xyz.size() / 3, rgb.size());
   io::OutputFile file(path, true);
   std::ostream& out = file.stream();
   out << "# .PCD v0.7 - Point Cloud Data file format\n"
-      << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+      << "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
       << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
-  // PCD binary data is the points' memory layout: little-endian float32 on every host livod
-  // runs on.
-  out.write(reinterpret_cast<const char*>(xyz.data()),
-            static_cast<std::streamsize>(n * 3 * sizeof(float)));
+  std::vector<char> buffer(n * 16);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::memcpy(&buffer[i * 16], &xyz[3 * i], 12);
+    std::memcpy(&buffer[i * 16 + 12], &rgb[i], 4);
+  }
+  out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
   file.commit();
 }
 

@@ -102,8 +102,18 @@ ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options)
   result.timing_text = options.out_dir / "timing.txt";
   result.timing_json = options.out_dir / "timing.json";
   result.frames_csv = options.out_dir / "frames.csv";
+  const bool camera = roles.camera >= 0;
+  if (!camera && !options.debug_images_dir.empty()) {
+    throw Error(
+        "--debug-images needs a camera that the visual update uses (an enabled camera and "
+        "estimator.vio.enabled)");
+  }
+  FileOutputs::CameraOutputs camera_outputs;
+  camera_outputs.colored_map = camera;
+  camera_outputs.debug_images = options.debug_images_dir;
+  camera_outputs.patch_size = config.estimator.vio.patch_size;
   FileOutputs outputs({result.trajectory, result.frames_csv}, options.map_cell_m,
-                      options.map_max_points);
+                      options.map_max_points, camera_outputs);
 
   // One thread reads, decodes and runs the filter; the estimator spreads residuals and map refits
   // over the pool. Its results do not depend on the pool size (estimator/task_runner.hpp), so the
@@ -113,6 +123,8 @@ ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options)
   runtime::SchedulerOptions so;
   so.max_recording =
       options.max_duration_s > 0.0 ? from_seconds(options.max_duration_s) : Nanoseconds(0);
+  so.vio_colorize = camera;
+  so.vio_debug = !options.debug_images_dir.empty();
   runtime::Scheduler scheduler(config, std::move(inputs), &pool, outputs, so);
 
   ProgressLine progress(options.progress);
@@ -135,7 +147,11 @@ ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options)
   progress.finish(progress_state(scheduler));
 
   outputs.close();
-  write_pcd(result.map, outputs.map().xyz());
+  if (outputs.colored_map()) {
+    write_pcd_rgb(result.map, outputs.map().xyz(), outputs.map().rgb());
+  } else {
+    write_pcd(result.map, outputs.map().xyz());
+  }
 
   ReplaySummary& s = result.summary;
   const auto& st = scheduler.stats();
@@ -146,6 +162,9 @@ ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options)
   s.counters = pipeline.counters();
   s.degenerate_frames = s.counters.degenerate_frames;
   outputs.series().summarise(s);
+  outputs.vio_series().summarise(s);
+  if (pipeline.vio() != nullptr) s.visual_map = pipeline.vio()->map().stats();
+  s.inv_exposure = outputs.inv_exposure();
   s.recording_s =
       st.first_event_ns ? to_seconds(Nanoseconds(st.last_event_ns - *st.first_event_ns)) : 0.0;
   s.wall_s = wall_s;
@@ -170,6 +189,7 @@ ReplayResult run_replay(const LivodConfig& config, const ReplayOptions& options)
     sensor.counters = r->source->summary();
     sensor.scans = r->scans;
     sensor.imu_samples = r->imu_samples;
+    sensor.images = r->images;
     sensor.clock = clock_summary(*r->clock);
     s.sensors.push_back(std::move(sensor));
   }

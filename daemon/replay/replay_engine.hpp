@@ -9,13 +9,17 @@
 //   on the recording's receive time, decoders, clock domains, LioPipeline) ──▶ FileOutputs ──▶
 //   trajectory, map, timing report
 //
-// Which sensors the estimator takes: runtime::assign_roles. Other sensors are not replayed (the
+// Which sensors the estimator takes: runtime::assign_roles (the body IMU, one LiDAR and, with
+// estimator.vio.enabled, the first enabled camera: its frames come from EuRoC/ASL or plain image
+// folders or ROS1 bag image topics, image_sources.hpp). Other sensors are not replayed (the
 // result's notes say so).
 //
 // Outputs in ReplayOptions::out_dir (created): trajectory.txt (TUM, mapped measurement time,
 // body frame in the estimator's world = the IMU frame at initialisation), map.pcd (binary PCD,
-// registered downsampled points through a bounded voxel filter), timing.txt, timing.json and
-// frames.csv (see timing_report.hpp).
+// registered downsampled points through a bounded voxel filter; with a camera x y z rgb, the
+// points seen in the images coloured from them, as FAST-LIVO2's coloured map), timing.txt,
+// timing.json and frames.csv (see timing_report.hpp); with debug_images_dir, one PNG per image
+// with its patches drawn (debug_images.hpp).
 
 #include <cstddef>
 #include <filesystem>
@@ -38,6 +42,9 @@ struct ReplayOptions {
   double max_duration_s = 0.0;
   // Estimator threads; < 0: the configuration's estimator.threads (0 there: one per core).
   int threads = -1;
+  // --debug-images: a folder (created) for the visual update's images with their patches drawn;
+  // empty: none. Needs a camera the visual update uses (livod::Error otherwise).
+  std::filesystem::path debug_images_dir;
 };
 
 struct ReplayResult {

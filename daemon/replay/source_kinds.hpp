@@ -20,7 +20,7 @@ std::unique_ptr<ReplaySource> make_pcap_source(const std::filesystem::path& file
                                                std::unique_ptr<drivers::LidarDecoder> decoder,
                                                const std::vector<std::uint16_t>& ports);
 
-// CAN frames of a candump log through the configured CAN IMU decoder (SBG only, for now).
+// CAN frames of a candump log through the configured CAN IMU decoder (SBG, Bosch MM7, custom).
 std::unique_ptr<ReplaySource> make_candump_source(const std::filesystem::path& file,
                                                   const CanConfig& can, const std::string& sensor);
 

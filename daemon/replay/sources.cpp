@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "daemon/replay/decoder_factory.hpp"
+#include "daemon/replay/image_sources.hpp"
 #include "daemon/replay/source_kinds.hpp"
 
 namespace livod::daemon::replay {
@@ -21,6 +22,10 @@ std::unique_ptr<ReplaySource> make_source(const SensorConfig& sensor,
         if (sensor.driver != Driver::can_imu) break;
         return make_candump_source(replay.file, sensor.can, sensor.name);
       case ReplayFormat::rosbag1: {
+        // Cameras: image topics (image_sources.hpp).
+        if (sensor_kind(sensor.driver) == SensorKind::camera) {
+          return make_bag_image_source(replay.file, replay.topic, sensor);
+        }
         std::unique_ptr<drivers::LidarDecoder> decoder;
         if (sensor.driver == Driver::ouster && sensor.metadata.empty()) {
           // ouster_ros bags record the metadata on a topic of their own.
@@ -31,7 +36,9 @@ std::unique_ptr<ReplaySource> make_source(const SensorConfig& sensor,
         return make_bag_source(replay.file, replay.topic, sensor, std::move(decoder));
       }
       case ReplayFormat::euroc:
-        break;
+        // Cameras: an EuRoC/ASL camera folder or a plain image folder (image_sources.hpp).
+        if (sensor_kind(sensor.driver) != SensorKind::camera) break;
+        return make_image_folder_source(replay.file, sensor);
     }
   } catch (const Error& e) {
     throw Error(what + ": " + e.what());

@@ -136,16 +136,37 @@ std::string format_timing_text(const ReplaySummary& s) {
       s.map.removed_voxels);
   out += fmt::format("map (map.pcd): {} points, {} dropped after the budget was spent\n",
                      s.exported_points, s.exported_dropped);
+  if (s.vio_ms.count > 0) {
+    const auto& c = s.counters;
+    out += fmt::format(
+        "\nvisual update: images in {}, image groups {}, visual updates {}, late {}, dropped {}, "
+        "rejected {}; inverse exposure at the end {:.4f}\n",
+        c.images_in, c.image_groups, c.vio_updates, c.images_late, c.images_dropped,
+        c.images_rejected, s.inv_exposure);
+    out += text_distribution("per image (wall)", s.vio_ms, "ms", 3);
+    out += text_distribution("pyramid", s.vio_pyramid_ms, "ms", 3);
+    out += text_distribution("selection", s.vio_selection_ms, "ms", 3);
+    out += text_distribution("update", s.vio_update_ms, "ms", 3);
+    out += text_distribution("map", s.vio_map_ms, "ms", 3);
+    out += text_distribution("patches used", s.vio_patches, "", 0);
+    out += fmt::format(
+        "visual map: {} points, {} reference patches, {:.2f} MiB; {} created, {} left the sliding "
+        "box, {} evicted by the budget\n",
+        s.visual_map.points, s.visual_map.observations,
+        static_cast<double>(s.visual_map.bytes) / kMiB, s.visual_map.created,
+        s.visual_map.removed_sliding, s.visual_map.removed_budget);
+  }
   out += "\nsensors:\n";
   for (const auto& sensor : s.sensors) {
     const auto& c = sensor.clock;
     out += fmt::format("  {} ({}): {}\n    {}\n", sensor.name, sensor.role, sensor.file,
                        sensor.counters);
     out += fmt::format(
-        "    scans {}, imu samples {}; clock {} ({}): offset {:.9f} s, skew {:+.3f} ppm, residual "
-        "median {:.1f} us, jitter {:.1f} us, observations {}, resets {}, rejected {}; "
+        "    scans {}, imu samples {}, images {}; clock {} ({}): offset {:.9f} s, skew {:+.3f} "
+        "ppm, "
+        "residual median {:.1f} us, jitter {:.1f} us, observations {}, resets {}, rejected {}; "
         "time_offset_s {:+.6f}\n",
-        sensor.scans, sensor.imu_samples, c.mode, c.quality, c.offset_s, c.skew_ppm,
+        sensor.scans, sensor.imu_samples, sensor.images, c.mode, c.quality, c.offset_s, c.skew_ppm,
         c.residual_median_us, c.jitter_us, c.observations, c.resets, c.rejected, c.time_offset_s);
   }
   return out;
@@ -189,18 +210,32 @@ std::string format_timing_json(const ReplaySummary& s) {
       s.map_bytes_peak, s.map.removed_voxels);
   out += fmt::format("  \"exported_points\": {}, \"exported_dropped\": {},\n", s.exported_points,
                      s.exported_dropped);
+  out += fmt::format(
+      "  \"vio\": {{\"images_in\": {}, \"image_groups\": {}, \"updates\": {}, \"late\": {}, "
+      "\"dropped\": {}, \"rejected\": {}, \"inv_exposure\": {}, \"ms\": {}, \"pyramid_ms\": {}, "
+      "\"selection_ms\": {}, \"update_ms\": {}, \"map_ms\": {}, \"patches\": {}, "
+      "\"visual_map\": {{\"points\": {}, \"observations\": {}, \"bytes\": {}, \"created\": {}, "
+      "\"removed_sliding\": {}, \"removed_budget\": {}}}}},\n",
+      s.counters.images_in, s.counters.image_groups, s.counters.vio_updates, s.counters.images_late,
+      s.counters.images_dropped, s.counters.images_rejected, num(s.inv_exposure),
+      json_distribution(s.vio_ms), json_distribution(s.vio_pyramid_ms),
+      json_distribution(s.vio_selection_ms), json_distribution(s.vio_update_ms),
+      json_distribution(s.vio_map_ms), json_distribution(s.vio_patches), s.visual_map.points,
+      s.visual_map.observations, s.visual_map.bytes, s.visual_map.created,
+      s.visual_map.removed_sliding, s.visual_map.removed_budget);
   out += "  \"sensors\": [";
   for (std::size_t i = 0; i < s.sensors.size(); ++i) {
     const auto& sensor = s.sensors[i];
     const auto& c = sensor.clock;
     out += fmt::format(
         "{}\n    {{\"name\": {}, \"role\": {}, \"file\": {}, \"counters\": {}, \"scans\": {}, "
-        "\"imu_samples\": {}, \"clock\": {{\"mode\": {}, \"quality\": {}, \"offset_s\": {:.9f}, "
+        "\"imu_samples\": {}, \"images\": {}, \"clock\": {{\"mode\": {}, \"quality\": {}, "
+        "\"offset_s\": {:.9f}, "
         "\"skew_ppm\": {}, \"residual_median_us\": {}, \"jitter_us\": {}, \"observations\": {}, "
         "\"resets\": {}, \"rejected\": {}, \"time_offset_s\": {}}}}}",
         i == 0 ? "" : ",", json_string(sensor.name), json_string(sensor.role),
         json_string(sensor.file), json_string(sensor.counters), sensor.scans, sensor.imu_samples,
-        json_string(c.mode), json_string(c.quality), c.offset_s, num(c.skew_ppm),
+        sensor.images, json_string(c.mode), json_string(c.quality), c.offset_s, num(c.skew_ppm),
         num(c.residual_median_us), num(c.jitter_us), c.observations, c.resets, c.rejected,
         num(c.time_offset_s));
   }
@@ -230,7 +265,8 @@ FrameTable::FrameTable(const std::filesystem::path& path) : file_(path) {
       << "frame,t,raw_points,used_points,matched,iterations,converged,updated,degenerate,"
          "translation_ratio,propagate_ms,undistort_ms,downsample_ms,residuals_ms,update_ms,map_ms,"
          "total_ms,"
-         "cpu_ms,map_planes,map_bytes,exported_points,rss_bytes\n";
+         "cpu_ms,map_planes,map_bytes,exported_points,rss_bytes,image,vio_ms,vio_patches,"
+         "inv_exposure\n";
 }
 
 void FrameTable::add(std::size_t frame, const estimator::FrameReport& r, double cpu_ms,
@@ -239,12 +275,15 @@ void FrameTable::add(std::size_t frame, const estimator::FrameReport& r, double 
   file_.stream() << fmt::format(
       "{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{}"
       ","
-      "{},{},{}\n",
+      "{},{},{},",
       frame, format_seconds(r.t.ns), r.raw_points, r.used_points, r.matched, r.iterations,
       r.converged ? 1 : 0, r.updated ? 1 : 0, r.degeneracy.degenerate ? 1 : 0,
       r.degeneracy.translation_ratio, t.propagate_ms, t.undistort_ms, t.downsample_ms,
       t.residuals_ms, t.update_ms, t.map_ms, t.total_ms, cpu_ms, r.map.planes, r.map.bytes,
       exported_points, rss_bytes);
+  const bool image = r.kind == estimator::MeasurementGroup::Kind::image;
+  file_.stream() << fmt::format("{},{:.4f},{},{:.6g}\n", image ? 1 : 0, r.timings.vio_ms,
+                                r.vio.patches, image ? r.vio.inv_exposure : 0.0);
 }
 
 void FrameTable::close() {

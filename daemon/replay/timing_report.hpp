@@ -47,6 +47,7 @@ struct SensorSummary {
   std::string counters;  // the source's summary line
   std::uint64_t scans = 0;
   std::uint64_t imu_samples = 0;
+  std::uint64_t images = 0;  // frames handed to the estimator
   ClockSummary clock;
 };
 
@@ -80,6 +81,11 @@ struct ReplaySummary {
   double exported_grid_half_extent_m = 0.0;
   std::size_t exported_budget = 0;
   std::vector<SensorSummary> sensors;
+  // The visual update, per image group (empty without a camera): its time and split, the
+  // patches it used, the visual map at the end and the inverse exposure of the last image.
+  Distribution vio_ms, vio_pyramid_ms, vio_selection_ms, vio_update_ms, vio_map_ms, vio_patches;
+  estimator::vio::VisualMapStats visual_map;
+  double inv_exposure = 1.0;
 };
 
 std::string format_timing_text(const ReplaySummary& s);

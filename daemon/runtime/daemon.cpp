@@ -15,6 +15,7 @@
 #include "daemon/runtime/live_outputs.hpp"
 #include "daemon/runtime/paced_sources.hpp"
 #include "daemon/runtime/scheduler.hpp"
+#include "daemon/runtime/service_notifier.hpp"
 #include "daemon/runtime/signals.hpp"
 #include "daemon/runtime/thread_scheduling.hpp"
 #include "daemon/worker_pool.hpp"
@@ -40,7 +41,7 @@ struct OpenedSources {
 };
 
 OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
-                        const DaemonOptions& options, drivers::Doorbell& wake) {
+                        const DaemonOptions& options, drivers::capture::Doorbell& wake) {
   OpenedSources out;
   LiveOptions lo;
   if (config.realtime.capture_priority > 0) lo.capture_priority = config.realtime.capture_priority;
@@ -58,7 +59,7 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
     }
     if (!is_packet_lidar(s.driver) || !std::holds_alternative<UdpSourceConfig>(s.source)) {
       throw Error(what + ": live operation is implemented for packet LiDARs over UDP (ouster, " +
-                  "velodyne, livox_sdk1, livox_sdk2) and their internal IMUs");
+                  "velodyne, livox_sdk1, livox_sdk2, hesai) and their internal IMUs");
     }
     auto source = open_live_lidar(s, lo);
     for (const auto& [stream, port] : source->local_ports()) {
@@ -75,7 +76,7 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
 }
 
 OpenedSources open_paced(const LivodConfig& config, const SensorRoles& roles,
-                         const DaemonOptions& options, drivers::Doorbell& wake) {
+                         const DaemonOptions& options, drivers::capture::Doorbell& wake) {
   const auto recordings = replay::assign_recordings(config, options.inputs);
   struct Pending {
     std::size_t index;
@@ -138,7 +139,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
     if (const auto refused = lock_memory(); !refused.empty()) spdlog::warn("{}", refused);
   }
 
-  drivers::Doorbell wake;  // capture/pacer threads -> scheduler
+  drivers::capture::Doorbell wake;  // capture/pacer threads -> scheduler
   OpenedSources opened = options.paced_replay ? open_paced(config, roles, options, wake)
                                               : open_live(config, roles, options, wake);
 
@@ -162,6 +163,20 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   po.map_cell_m = options.map_cell_m;
   po.map_max_points = options.map_max_points;
   po.publish_cloud = options.bus != nullptr && lcm.publish_cloud;
+  // systemd: a no-op unless asked for and NOTIFY_SOCKET is set.
+  ServiceNotifier notifier =
+      options.notify_systemd
+          ? ServiceNotifier::from_environment()
+          : ServiceNotifier([](const std::string&) { return true; }, std::nullopt);
+  if (options.notify_systemd) {
+    // The publisher thread formats the STATUS= line at each health record; the main thread sends
+    // it (set_status only stores it under a lock).
+    po.on_health = [&notifier,
+                    previous = std::optional<HealthRecord>()](const HealthRecord& h) mutable {
+      notifier.set_status(service_status_line(h, previous ? &*previous : nullptr));
+      previous = h;
+    };
+  }
   PublisherChannels::Sizes sizes;
   if (po.publish_cloud) sizes.cloud_points = static_cast<std::size_t>(lcm.cloud_max_points);
   if (!po.map_pcd.empty()) sizes.cloud_points = std::max(sizes.cloud_points, kMapPointsPerFrame);
@@ -184,6 +199,9 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   publisher.watch("scheduler", [&scheduler_beat] { return scheduler_beat.beats(); });
   publisher.watch("publisher", [&publisher] { return publisher.heartbeat().beats(); });
   for (auto& t : source_threads) publisher.watch(t.name, t.beats);
+  notifier.watch("scheduler", [&scheduler_beat] { return scheduler_beat.beats(); });
+  notifier.watch("publisher", [&publisher] { return publisher.heartbeat().beats(); });
+  for (auto& t : source_threads) notifier.watch(t.name, t.beats);
   publisher.start();
 
   const Nanoseconds health_period = from_seconds(config.health.period_s);
@@ -204,6 +222,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
     try {
       HostTime next_health = host_now() + health_period;
       while (!stop.stop_requested()) {
+        if (options.scheduler_turn_hook) options.scheduler_turn_hook();
         scheduler_beat.beat();
         const std::uint32_t token = wake.prepare();
         const bool did = scheduler.step();
@@ -234,9 +253,21 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   spdlog::info("livod {}: {} sensor(s) {}", options.paced_replay ? "replay --realtime" : "run",
                scheduler.sensors().size(),
                options.paced_replay ? "paced from their recordings" : "live; ready");
+  {
+    std::string names;
+    for (const auto& s : scheduler.sensors())
+      names += (names.empty() ? "" : ", ") + s->config->name;
+    notifier.ready(host_now(), "started: " + names + "; waiting for data");
+  }
 
+  // The watchdog is pinged from this thread, not from a thread it watches: the main thread does
+  // nothing but wait for signals (waking every 100 ms), so it stays responsive whatever the
+  // pipeline does, and each ping is gated on every other thread's heartbeat having advanced since
+  // the previous one. Pinging from the scheduler (or the publisher) would prove only that thread
+  // alive; pinging from here unconditionally would keep a stuck scheduler's service running.
   const HostTime started = host_now();
   while (!scheduler_done.load(std::memory_order_acquire)) {
+    notifier.tick(host_now());
     if (options.stop.stop_requested()) {
       result.stopped_by = "stop request";
       break;
@@ -255,6 +286,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
     if (s == SIGHUP) spdlog::info("SIGHUP ignored: livod does not reload its configuration");
     if (s == SIGUSR1) spdlog::warn("SIGUSR1 ignored: map saving on request is not implemented");
   }
+  notifier.stopping(result.stopped_by.empty() ? "the scheduler stopped" : result.stopped_by);
   scheduler_thread.request_stop();
   wake.ring();
   scheduler_thread.join();

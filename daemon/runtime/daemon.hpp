@@ -5,7 +5,8 @@
 //   capture threads (one per socket; or a pacer thread per pcap) ──rings──▶ scheduler thread
 //   (sources, clock domains, estimator on the worker pool) ──records──▶ publisher thread (LCM,
 //   trajectory, map, timing, log lines); control threads (Livox supervisor, Ouster metadata);
-//   the calling thread handles signals (SIGINT/SIGTERM stop; SIGHUP is ignored: no reload).
+//   the calling thread handles signals (SIGINT/SIGTERM stop; SIGHUP is ignored: no reload) and
+//   talks to systemd (READY, STATUS, the heartbeat-gated WATCHDOG ping, STOPPING).
 //
 // Stopping (a signal, the options' stop token, or the end of a paced recording): the sources stop
 // capturing, the scheduler drains their rings (bounded in time), flushes the decoders and runs the
@@ -47,6 +48,12 @@ struct DaemonOptions {
   // Called on the calling thread once every socket is bound and every thread runs: the bound
   // ports per sensor ("os1.lidar" -> 40123).
   std::function<void(const std::vector<std::pair<std::string, std::uint16_t>>&)> on_ready;
+  // Speak systemd's notification protocol (service_notifier.hpp) when NOTIFY_SOCKET is set:
+  // READY=1, STATUS=, heartbeat-gated WATCHDOG=1, STOPPING=1. `livod run` sets it.
+  bool notify_systemd = false;
+  // Tests: called on the scheduler thread at the top of every loop turn, before its heartbeat
+  // (a test blocks in it to stall the scheduler and see the watchdog pings stop). Empty: none.
+  std::function<void()> scheduler_turn_hook;
 };
 
 struct DaemonResult {

@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "daemon/config/sensor_models.hpp"
 #include "daemon/replay/decoder_factory.hpp"
 #include "drivers/capture/live_source.hpp"
 #include "drivers/livox/supervisor.hpp"
@@ -21,13 +22,6 @@
 namespace livod::daemon::runtime {
 namespace {
 
-// Ring slot sizes: the largest datagram of the port, rounded up (docs/live-capture.md "Sizing").
-constexpr std::size_t kVelodyneSlotBytes = 1248;   // 1206-byte data, 512-byte position packets
-constexpr std::size_t kLivoxSlotBytes = 1408;      // SDK1 <= 1362, SDK2 <= 1380
-constexpr std::size_t kOusterImuSlotBytes = 4096;  // LEGACY 48 B ... ACCEL32_GYRO32_NMEA ~2.5 KB
-// An Ouster lidar packet before its metadata is known: the largest profile (128 beams, dual
-// return, 16 columns) is about 33 KB.
-constexpr std::size_t kOusterMaxLidarBytes = 34 * 1024;
 constexpr int kOusterHttpPort = 80;
 
 std::string label(const SensorConfig& s) {
@@ -67,39 +61,27 @@ class LiveLidar final : public LiveLidarSource {
     if (udp == nullptr) throw Error(label(sensor) + ": live operation needs a source.udp section");
     const std::string what = label(sensor);
 
+    // Ring slot sizes are the family's largest datagrams (drivers/lidar_family.hpp).
+    const drivers::LidarFamily* family = lidar_family(sensor.driver);
+    if (family == nullptr) throw Error(what + " is not a packet LiDAR");
+    std::size_t lidar_slot = family->lidar_datagram_bytes;
     std::unique_ptr<drivers::LidarDecoder> decoder;
-    std::size_t lidar_slot = kVelodyneSlotBytes;
-    switch (sensor.driver) {
-      case Driver::velodyne:
-        decoder = replay::make_lidar_decoder(sensor);
-        break;
-      case Driver::livox_sdk1:
-      case Driver::livox_sdk2:
-        decoder = replay::make_lidar_decoder(sensor);
-        lidar_slot = kLivoxSlotBytes;
-        break;
-      case Driver::ouster: {
-        lidar_slot = kOusterMaxLidarBytes;
-        if (!sensor.metadata.empty()) {
-          decoder = replay::make_lidar_decoder(sensor);
-          if (const auto* o = dynamic_cast<const drivers::ouster::OusterDecoder*>(decoder.get())) {
-            lidar_slot = o->packet_format().lidar_packet_size;
-          }
-        } else if (udp->sensor_address.empty()) {
-          throw Error(what + ": without a metadata file the metadata is fetched from the sensor: " +
-                      "set source.udp.sensor_address");
-        }
-        break;
+    if (sensor.driver != Driver::ouster || !sensor.metadata.empty()) {
+      decoder = replay::make_lidar_decoder(sensor);
+      // An Ouster's point packets have the size its metadata's profile gives.
+      if (const auto* o = dynamic_cast<const drivers::ouster::OusterDecoder*>(decoder.get())) {
+        lidar_slot = o->packet_format().lidar_packet_size;
       }
-      default:
-        throw Error(what + " is not a packet LiDAR");
+    } else if (udp->sensor_address.empty()) {
+      throw Error(what + ": without a metadata file the metadata is fetched from the sensor: " +
+                  "set source.udp.sensor_address");
     }
 
-    drivers::LiveSourceConfig lc;
+    drivers::capture::LiveSourceConfig lc;
     lc.name = sensor.name;
     lc.stale_after = options.stale_after;
     const auto add_stream = [&](const std::string& name, std::uint16_t port, std::size_t slot) {
-      drivers::UdpStreamConfig s;
+      drivers::capture::UdpStreamConfig s;
       s.name = name;
       s.socket.bind_address = udp->bind_address;
       s.socket.port = options.ephemeral_ports ? 0 : port;
@@ -120,14 +102,13 @@ class LiveLidar final : public LiveLidarSource {
     add_stream("lidar", ports.lidar, lidar_slot);
     const bool imu_port = ports.imu != 0 && ports.imu != ports.lidar && sensor.imu.enabled;
     if (imu_port) {
-      add_stream("imu", ports.imu,
-                 sensor.driver == Driver::ouster ? kOusterImuSlotBytes : kLivoxSlotBytes);
+      add_stream("imu", ports.imu, family->aux_datagram_bytes);
     }
-    if (ports.position != 0) add_stream("position", ports.position, kVelodyneSlotBytes);
-    live_ = std::make_unique<drivers::LiveSource>(lc, std::move(decoder));
+    if (ports.position != 0) add_stream("position", ports.position, family->aux_datagram_bytes);
+    live_ = std::make_unique<drivers::capture::LiveSource>(lc, std::move(decoder));
 
     if (sensor.driver == Driver::livox_sdk1 || sensor.driver == Driver::livox_sdk2) {
-      drivers::LivoxSupervisorConfig sc;
+      livox::LivoxSupervisorConfig sc;
       sc.device.protocol =
           sensor.driver == Driver::livox_sdk1 ? livox::Protocol::kSdk1 : livox::Protocol::kSdk2;
       sc.device.host_ip = host_ip_for(*udp, what);
@@ -147,16 +128,16 @@ class LiveLidar final : public LiveLidarSource {
       if (sc.device.protocol == livox::Protocol::kSdk1 && !sc.device.lidar_ip) {
         sc.broadcast_port = static_cast<std::uint16_t>(55000);
       }
-      std::vector<const drivers::UdpStream*> data;
+      std::vector<const drivers::capture::UdpStream*> data;
       for (std::size_t i = 0; i < live_->stream_count(); ++i) data.push_back(&live_->stream(i));
-      livox_ = std::make_unique<drivers::LivoxSupervisor>(sc, std::move(data));
+      livox_ = std::make_unique<livox::LivoxSupervisor>(sc, std::move(data));
     }
     if (sensor.driver == Driver::ouster && !udp->sensor_address.empty()) {
-      drivers::OusterMetadataFetcherConfig fc;
+      drivers::ouster::OusterMetadataFetcherConfig fc;
       fc.host = udp->sensor_address;
       fc.port = kOusterHttpPort;
-      fetcher_ = std::make_unique<drivers::OusterMetadataFetcher>(fc);
-      reinit_ = std::make_unique<drivers::OusterReinitHandler>(
+      fetcher_ = std::make_unique<drivers::ouster::OusterMetadataFetcher>(fc);
+      reinit_ = std::make_unique<drivers::ouster::OusterReinitHandler>(
           *fetcher_, drivers::ouster::OusterDecoderOptions{});
     }
   }
@@ -183,8 +164,8 @@ class LiveLidar final : public LiveLidarSource {
     live_->stop();
   }
 
-  std::optional<drivers::SourceHealth> health(HostTime now) override {
-    drivers::SourceHealth h = live_->update_health(now);
+  std::optional<drivers::capture::SourceHealth> health(HostTime now) override {
+    drivers::capture::SourceHealth h = live_->update_health(now);
     if (livox_) livox_->annotate(h);
     if (reinit_) reinit_->note_health(h);
     return h;
@@ -213,7 +194,7 @@ class LiveLidar final : public LiveLidarSource {
   [[nodiscard]] std::vector<SourceThread> threads() const override {
     std::vector<SourceThread> out;
     for (std::size_t i = 0; i < live_->stream_count(); ++i) {
-      const drivers::UdpStream* stream = &live_->stream(i);
+      const drivers::capture::UdpStream* stream = &live_->stream(i);
       out.push_back(
           {name_ + "." + stream_names_[i], [stream] { return stream->counters().wakeups; }});
     }
@@ -233,10 +214,10 @@ class LiveLidar final : public LiveLidarSource {
   std::string name_;
   std::vector<std::string> stream_names_;
   // Destroyed in reverse: the supervisors stop before the streams they watch.
-  std::unique_ptr<drivers::LiveSource> live_;
-  std::unique_ptr<drivers::LivoxSupervisor> livox_;
-  std::unique_ptr<drivers::OusterMetadataFetcher> fetcher_;
-  std::unique_ptr<drivers::OusterReinitHandler> reinit_;
+  std::unique_ptr<drivers::capture::LiveSource> live_;
+  std::unique_ptr<livox::LivoxSupervisor> livox_;
+  std::unique_ptr<drivers::ouster::OusterMetadataFetcher> fetcher_;
+  std::unique_ptr<drivers::ouster::OusterReinitHandler> reinit_;
   bool stopped_ = false;
 };
 

@@ -1,13 +1,14 @@
 #pragma once
-// A packet LiDAR (Velodyne, Ouster, Livox) live over UDP, as a runtime source: one capture thread
-// per port into a packet ring (drivers/capture/live_source.hpp), drained by the scheduler through
-// the model's decoder, with the family's supervision beside it:
-//   Livox:  drivers::LivoxSupervisor (a control thread: handshake/discovery, heartbeats, STALE and
+// A packet LiDAR (Velodyne, Ouster, Livox, Hesai) live over UDP, as a runtime source: one capture
+// thread per port into a packet ring (drivers/capture/live_source.hpp) whose slots are the
+// family's largest datagrams (drivers/lidar_family.hpp), drained by the scheduler through the
+// family's decoder (its factory), with the family's supervision beside it:
+//   Livox:  livox::LivoxSupervisor (a control thread: handshake/discovery, heartbeats, STALE and
 //           re-handshake without touching the data path);
 //   Ouster: the metadata file, or HTTP from the sensor (an OusterMetadataFetcher thread) when none
-//           is configured or the sensor re-initialises (drivers::OusterReinitHandler swaps the
-//           decoder between deliveries);
-//   Velodyne: nothing to supervise (a silent sensor is STALE and streams again by itself).
+//           is configured or the sensor re-initialises (drivers::ouster::OusterReinitHandler swaps
+//           the decoder between deliveries);
+//   Velodyne, Hesai: nothing to supervise (a silent sensor is STALE and streams again by itself).
 //
 // Every socket is bound by the constructor (errors name the sensor and the address), so a daemon
 // that has built its sources is ready to receive.
@@ -31,7 +32,7 @@ struct LiveOptions {
   // Replaces the configured local ports (tests bind ephemeral ports, reported by local_ports()).
   bool ephemeral_ports = false;
   // Rung by the capture threads when they queue packets (wakes the scheduler). May be null.
-  drivers::Doorbell* doorbell = nullptr;
+  drivers::capture::Doorbell* doorbell = nullptr;
 };
 
 class LiveLidarSource : public MeasurementSource {

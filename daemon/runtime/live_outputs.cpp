@@ -123,7 +123,7 @@ void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {
       h->sensors[i] = publish::sensor_health_record(*health, kind, &clock, rates);
     } else {
       // A recording released by the scheduler: its state follows the events it delivers.
-      drivers::SourceHealth derived;
+      drivers::capture::SourceHealth derived;
       derived.name = s.config->name;
       h->sensors[i] = publish::sensor_health_record(derived, kind, &clock, rates);
       h->sensors[i].state = !s.last_event ? publish::SensorState::kWaiting

@@ -39,7 +39,7 @@ struct PublisherChannels {
   RecordChannel<FrameRecord> frames;
   RecordChannel<ImuPoseRecord> imu_poses;
   RecordChannel<HealthRecord> health;
-  drivers::Doorbell doorbell;  // rung by the producer after each publish
+  drivers::capture::Doorbell doorbell;  // rung by the producer after each publish
   std::size_t cloud_points;
 };
 
@@ -69,9 +69,9 @@ class LiveOutputs final : public OutputSink {
  private:
   // Per-sensor rate meters (points, IMU samples, scans per second), created at the first health.
   struct SensorRates {
-    drivers::RateMeter points{Nanoseconds(5'000'000'000)};
-    drivers::RateMeter imu{Nanoseconds(5'000'000'000)};
-    drivers::RateMeter scans{Nanoseconds(5'000'000'000)};
+    drivers::capture::RateMeter points{Nanoseconds(5'000'000'000)};
+    drivers::capture::RateMeter imu{Nanoseconds(5'000'000'000)};
+    drivers::capture::RateMeter scans{Nanoseconds(5'000'000'000)};
   };
 
   PublisherChannels& channels_;

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "daemon/replay/decoder_factory.hpp"
 #include "drivers/capture/health.hpp"
 #include "drivers/capture/packet_ring.hpp"
@@ -25,21 +26,22 @@ class PacedPcap final : public MeasurementSource {
       : file_(file), monitor_("pcap", Nanoseconds(500'000'000), Nanoseconds(5'000'000'000)) {
     auto decoder = replay::make_lidar_decoder(sensor);
     const std::vector<std::uint16_t> routed = ports.empty() ? decoder->default_ports() : ports;
-    std::vector<drivers::PacketRing*> rings;
+    std::vector<drivers::capture::PacketRing*> rings;
     for (const std::uint16_t port : routed) {
-      rings_.push_back(std::make_unique<drivers::PacketRing>(kRingCapacity, kSlotBytes));
-      routes_.push_back(drivers::RingRoute{port, rings_.back().get()});
+      rings_.push_back(std::make_unique<drivers::capture::PacketRing>(kRingCapacity, kSlotBytes));
+      routes_.push_back(drivers::capture::RingRoute{port, rings_.back().get()});
       rings.push_back(rings_.back().get());
     }
-    consumer_ = std::make_unique<drivers::StreamConsumer>(std::move(decoder), std::move(rings));
-    drivers::PaceOptions po;
+    consumer_ =
+        std::make_unique<drivers::capture::StreamConsumer>(std::move(decoder), std::move(rings));
+    drivers::capture::PaceOptions po;
     po.epoch_record_ns = schedule.t0_record_ns;
     po.epoch = schedule.start;
     po.progress = &progress_;
     po.doorbell = schedule.doorbell;
     pacer_ = std::jthread([this, po](const std::stop_token& stop) {
       try {
-        result_ = drivers::push_pcap_paced(file_, routes_, po, stop);
+        result_ = drivers::capture::push_pcap_paced(file_, routes_, po, stop);
       } catch (const std::exception& e) {
         // Reported by summary(); the source then ends like a recording that ended.
         error_ = e.what();
@@ -67,13 +69,13 @@ class PacedPcap final : public MeasurementSource {
     }
   }
 
-  std::optional<drivers::SourceHealth> health(HostTime now) override {
-    drivers::CaptureCounters c;
+  std::optional<drivers::capture::SourceHealth> health(HostTime now) override {
+    drivers::capture::CaptureCounters c;
     c.pushed = progress_.delivered.load(std::memory_order_relaxed);
     c.datagrams = c.pushed + progress_.failed.load(std::memory_order_relaxed);
     for (const auto& r : rings_) c.ring_overruns += r->overruns();
     c.last_rx_ns = progress_.last_delivery_ns.load(std::memory_order_relaxed);
-    drivers::SourceHealth h;
+    drivers::capture::SourceHealth h;
     h.name = file_.filename().string();
     h.streams.push_back(monitor_.update(now, c));
     h.decoder = consumer_->decoder_counters();
@@ -105,14 +107,14 @@ class PacedPcap final : public MeasurementSource {
 
  private:
   std::filesystem::path file_;
-  std::vector<std::unique_ptr<drivers::PacketRing>> rings_;
-  std::vector<drivers::RingRoute> routes_;
-  std::unique_ptr<drivers::StreamConsumer> consumer_;
-  drivers::StreamMonitor monitor_;
-  drivers::PaceProgress progress_;
+  std::vector<std::unique_ptr<drivers::capture::PacketRing>> rings_;
+  std::vector<drivers::capture::RingRoute> routes_;
+  std::unique_ptr<drivers::capture::StreamConsumer> consumer_;
+  drivers::capture::StreamMonitor monitor_;
+  drivers::capture::PaceProgress progress_;
   // Written by the pacer before `done` (release), read after (acquire).
   std::string error_;
-  drivers::PaceResult result_;
+  drivers::capture::PaceResult result_;
   std::jthread pacer_;  // last: stopped and joined before the rings go
 };
 
@@ -143,6 +145,11 @@ class PacedRecording final : public MeasurementSource {
         ImuSample s = sample;
         s.stamp.host += Nanoseconds(shift_);
         if (target_->on_imu) target_->on_imu(s);
+      };
+      shifted_.on_image = [this](const ImageFrame& frame) {
+        ImageFrame f = frame;  // shares the pixels
+        f.stamp.host += Nanoseconds(shift_);
+        if (target_->on_image) target_->on_image(f);
       };
     }
     target_ = &sinks;

@@ -4,7 +4,7 @@
 // recordings), through the same path as live operation:
 //   pcap     a pacer thread pushes each datagram into the packet ring of its port, stamped with
 //            the monotonic time of the push as a capture thread would stamp it; the scheduler
-//            drains the rings through a drivers::StreamConsumer, exactly as live;
+//            drains the rings through a drivers::capture::StreamConsumer, exactly as live;
 //   others   (candump logs, bag topics: live has no ring for them yet) the recorded source is
 //            released by the scheduler itself when its event is due; its receive times are moved
 //            onto the monotonic clock by the same schedule (t -> start + (t - t0)).
@@ -25,9 +25,10 @@ namespace livod::daemon::runtime {
 
 // The common schedule of a paced replay.
 struct PaceSchedule {
-  std::int64_t t0_record_ns = 0;          // the earliest first event of every recording
-  HostTime start;                         // when t0 is due (CLOCK_MONOTONIC)
-  drivers::Doorbell* doorbell = nullptr;  // rung by the pacer threads (wakes the scheduler)
+  std::int64_t t0_record_ns = 0;  // the earliest first event of every recording
+  HostTime start;                 // when t0 is due (CLOCK_MONOTONIC)
+  drivers::capture::Doorbell* doorbell =
+      nullptr;  // rung by the pacer threads (wakes the scheduler)
 
   [[nodiscard]] HostTime due(std::int64_t record_ns) const {
     return start + Nanoseconds(record_ns - t0_record_ns);

@@ -156,6 +156,7 @@ void Publisher::on_health(HealthRecord& h) {
   }
   ++stats_.health;
   log_health(h);
+  if (options_.on_health) options_.on_health(h);
 }
 
 void Publisher::log_health(const HealthRecord& h) {

@@ -56,6 +56,9 @@ struct PublisherOptions {
   Nanoseconds stuck_after{2'000'000'000};  // a heartbeat older than this is "stuck" in health
   // Log one health summary line this often (state changes are logged at once).
   Nanoseconds log_period{60'000'000'000};
+  // Called on the publisher thread with each health record once it is complete (the daemon
+  // derives the systemd STATUS= line from it); may be empty.
+  std::function<void(const HealthRecord&)> on_health;
 };
 
 struct PublisherStats {

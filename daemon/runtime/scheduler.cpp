@@ -2,9 +2,11 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
 
 namespace livod::daemon::runtime {
 namespace {
@@ -25,10 +27,13 @@ double process_cpu_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-std::string unused_reason(const SensorConfig& s) {
+std::string unused_reason(const LivodConfig& config, const SensorConfig& s) {
   if (!s.enabled) return "disabled";
-  if (sensor_kind(s.driver) == SensorKind::camera)
-    return "the estimator runs LiDAR-inertial odometry only";
+  if (sensor_kind(s.driver) == SensorKind::camera) {
+    return config.estimator.vio.enabled
+               ? "the visual update uses one camera, the first enabled one"
+               : "estimator.vio.enabled is false (LiDAR-inertial odometry only)";
+  }
   return "the estimator takes the body IMU and one LiDAR";
 }
 
@@ -54,12 +59,41 @@ SensorRoles assign_roles(const LivodConfig& config) {
   if (roles.lidar < 0)
     throw Error("the configuration has no enabled LiDAR: the estimator needs one");
   roles.T_imu_lidar = config.sensors[static_cast<std::size_t>(roles.lidar)].T_body_sensor;
+  if (config.estimator.vio.enabled) {
+    for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+      const auto& s = config.sensors[i];
+      if (s.enabled && sensor_kind(s.driver) == SensorKind::camera) {
+        roles.camera = static_cast<int>(i);
+        break;
+      }
+    }
+  }
   roles.unused_reason.resize(config.sensors.size());
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
-    const bool used = static_cast<int>(i) == roles.body_imu || static_cast<int>(i) == roles.lidar;
-    if (!used) roles.unused_reason[i] = unused_reason(config.sensors[i]);
+    const auto n = static_cast<int>(i);
+    const bool used = n == roles.body_imu || n == roles.lidar || n == roles.camera;
+    if (!used) roles.unused_reason[i] = unused_reason(config, config.sensors[i]);
   }
   return roles;
+}
+
+estimator::vio::VioCamera vio_camera(const SensorConfig& sensor) {
+  const CameraConfig& c = sensor.camera;
+  estimator::vio::VioCamera cam;
+  auto& k = cam.intrinsics;
+  k.model = c.model == CameraModel::equidistant ? CameraIntrinsics::Model::kEquidistant
+                                                : CameraIntrinsics::Model::kPinholeRadtan;
+  k.width = c.width;
+  k.height = c.height;
+  k.fx = c.intrinsics[0];
+  k.fy = c.intrinsics[1];
+  k.cx = c.intrinsics[2];
+  k.cy = c.intrinsics[3];
+  for (std::size_t i = 0; i < 4 && i < c.distortion.size(); ++i) k.distortion[i] = c.distortion[i];
+  if (c.distortion.size() == 5) k.radtan_k3 = c.distortion[4];
+  cam.scale = c.scale;
+  cam.T_imu_cam = sensor.T_body_sensor;
+  return cam;
 }
 
 Scheduler::Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
@@ -74,6 +108,11 @@ Scheduler::Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
   po.T_imu_lidar = roles_.T_imu_lidar;
   po.runner = runner;
   po.max_queued_scans = options_.max_queued_scans;
+  if (roles_.camera >= 0) {
+    po.camera = vio_camera(config_.sensors[static_cast<std::size_t>(roles_.camera)]);
+    po.colorize = options_.vio_colorize;
+    po.vio_debug = options_.vio_debug;
+  }
   pipeline_ = std::make_unique<estimator::LioPipeline>(po);
   want_imu_poses_ = sink_.wants_imu_poses();
   build_sensors(std::move(inputs));
@@ -84,6 +123,7 @@ Scheduler::~Scheduler() = default;
 void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
   const auto body = static_cast<std::size_t>(roles_.body_imu);
   const auto lidar = static_cast<std::size_t>(roles_.lidar);
+  const int camera = roles_.camera;
   std::vector<std::optional<SensorInput>> by_index(config_.sensors.size());
   for (auto& in : inputs) {
     if (in.sensor_index >= config_.sensors.size()) {
@@ -95,7 +135,8 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
     const SensorConfig& s = config_.sensors[i];
     const bool is_body = i == body;
     const bool is_lidar = i == lidar;
-    if (!is_body && !is_lidar) continue;
+    const bool is_camera = static_cast<int>(i) == camera;
+    if (!is_body && !is_lidar && !is_camera) continue;
     if (!by_index[i] || !by_index[i]->source) {
       throw Error("sensor '" + s.name + "' has no source");
     }
@@ -106,8 +147,12 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
     r->source = std::move(by_index[i]->source);
     r->scans_to_estimator = is_lidar;
     r->imu_to_estimator = is_body;
+    r->images_to_estimator = is_camera;
     r->imu_usable = sensor_kind(s.driver) == SensorKind::imu || s.imu.enabled;
-    r->role = is_lidar && is_body ? "lidar + body imu" : is_lidar ? "lidar" : "body imu";
+    r->role = is_camera             ? "camera"
+              : is_lidar && is_body ? "lidar + body imu"
+              : is_lidar            ? "lidar"
+                                    : "body imu";
     r->clock = std::make_unique<SensorClockMapper>(s);
     ScheduledSensor* self = r.get();
     r->sinks.on_imu = [this, self](const ImuSample& sample) {
@@ -133,6 +178,17 @@ void Scheduler::build_sensors(std::vector<SensorInput> inputs) {
       self->clock->map_scan(copy);
       ++self->scans;
       pipeline_->add_scan(std::move(copy));
+    };
+    r->sinks.on_image = [this, self](const ImageFrame& image) {
+      if (!self->images_to_estimator) return;
+      // camera.decimation keeps every n-th frame (FAST-LIVO2 hilti_en: 4).
+      const auto decimation =
+          static_cast<std::uint64_t>(std::max(1, self->config->camera.decimation));
+      if (self->images_seen++ % decimation != 0) return;
+      ImageFrame frame = image;  // shares the pixels: the source made them for this frame
+      self->clock->map_image(frame);
+      ++self->images;
+      pipeline_->add_image(std::move(frame));
     };
     sensors_.push_back(std::move(r));
   }

@@ -15,8 +15,10 @@
 //
 // The estimator takes the body IMU (body_frame) and one LiDAR: the body IMU's own LiDAR when the
 // body is an internal IMU ("<lidar>.imu"), else the first enabled LiDAR. T_imu_lidar is that
-// LiDAR's T_body_sensor. The LiDAR's internal IMU, when enabled, feeds its clock domain even when
-// it is not the body IMU.
+// LiDAR's T_body_sensor. With estimator.vio.enabled it also takes the first enabled camera, whose
+// frames go through that camera's clock domain into the visual update (LIO then VIO at the image
+// time, estimator/sync); T_imu_cam is its T_body_sensor. The LiDAR's internal IMU, when enabled,
+// feeds its clock domain even when it is not the body IMU.
 
 #include <cstddef>
 #include <cstdint>
@@ -40,6 +42,7 @@ namespace livod::daemon::runtime {
 struct SensorRoles {
   int body_imu = -1;  // index into config.sensors
   int lidar = -1;     // the estimator's LiDAR
+  int camera = -1;    // the visual update's camera; -1: none (no camera, or VIO disabled)
   Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();
   // Per sensor: why it is not used (empty when used). Disabled sensors and sensors the estimator
   // does not take.
@@ -48,6 +51,11 @@ struct SensorRoles {
 
 // Throws livod::Error when the configuration names no body IMU or has no enabled LiDAR.
 SensorRoles assign_roles(const LivodConfig& config);
+
+// The estimator's camera from a camera sensor's configuration: model, size and distortion at full
+// resolution, the configured scale and T_imu_cam = the sensor's T_body_sensor (the body frame is
+// the IMU's).
+estimator::vio::VioCamera vio_camera(const SensorConfig& sensor);
 
 // A source for one configured sensor.
 struct SensorInput {
@@ -62,22 +70,30 @@ struct SchedulerOptions {
   // Replay only: stop once this much recording (receive time after the first event) has been
   // delivered; 0 = everything.
   Nanoseconds max_recording{0};
+  // With a camera: colour the registered scan of image groups from the image
+  // (PipelineOutput::colors; replay's map.pcd) and keep the visual update's patches and image for
+  // drawing (--debug-images).
+  bool vio_colorize = false;
+  bool vio_debug = false;
 };
 
 // One sensor as the scheduler runs it.
 struct ScheduledSensor {
   const SensorConfig* config = nullptr;
   std::size_t index = 0;
-  std::string role;  // "lidar + body imu", "lidar", "body imu"
+  std::string role;  // "lidar + body imu", "lidar", "body imu", "camera"
   std::string origin;
   std::unique_ptr<MeasurementSource> source;
   std::unique_ptr<SensorClockMapper> clock;
   bool scans_to_estimator = false;
   bool imu_to_estimator = false;
+  bool images_to_estimator = false;
   bool imu_usable = false;  // its IMU samples may feed the clock (an internal IMU, or an IMU)
   drivers::DecoderSinks sinks;
   std::uint64_t scans = 0;
   std::uint64_t imu_samples = 0;
+  std::uint64_t images = 0;       // frames handed to the estimator
+  std::uint64_t images_seen = 0;  // frames the source delivered (camera.decimation counts them)
   std::optional<HostTime> last_event;  // receive time of the newest delivered event
 };
 

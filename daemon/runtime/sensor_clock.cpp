@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/image.hpp"
+
 namespace livod::daemon::runtime {
 namespace {
 
@@ -62,6 +64,11 @@ void SensorClockMapper::map_scan(LidarScan& scan) {
   const MappedTime t = imu_feeds ? domain_.map(scan.start.sensor)
                                  : domain_.observe(scan.start.sensor, scan.start.host);
   scan.start.mapped = with_offset(t);
+}
+
+void SensorClockMapper::map_image(ImageFrame& frame) {
+  frame.stamp.mapped = with_offset(domain_.observe(frame.stamp.sensor, frame.stamp.host));
+  set_exposure_times(frame);
 }
 
 }  // namespace livod::daemon::runtime

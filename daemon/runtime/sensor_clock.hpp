@@ -17,6 +17,10 @@
 #include "core/measurement.hpp"
 #include "daemon/config/config.hpp"
 
+namespace livod {
+struct ImageFrame;  // core/image.hpp
+}  // namespace livod
+
 namespace livod::daemon::runtime {
 
 // ClockConfig (YAML) -> ClockDomainConfig. `auto` is free_running for sensors decoded from their
@@ -33,6 +37,10 @@ class SensorClockMapper {
   // Sets start.mapped; per-point offsets stay sensor-clock durations (a skew of 100 ppm changes
   // a 0.1 s scan by 10 us).
   void map_scan(LidarScan& scan);
+  // Sets stamp.mapped from the frame's sensor and receive stamps (each frame observes the clock:
+  // cameras have no faster stream), then trigger_time and mid_exposure from its exposure and
+  // stamp_marks (core/image.hpp).
+  void map_image(ImageFrame& frame);
 
   [[nodiscard]] const ClockDomain& domain() const { return domain_; }
   [[nodiscard]] double time_offset_s() const { return to_seconds(time_offset_); }

@@ -63,7 +63,7 @@ class MeasurementSource {
   // Per-stream health (rates, STALE, kernel drops, ring overruns, decoder counters, supervision)
   // for sources that have streams; nullopt for plain recordings, whose health the scheduler
   // derives from the events they deliver.
-  [[nodiscard]] virtual std::optional<drivers::SourceHealth> health(HostTime /*now*/) {
+  [[nodiscard]] virtual std::optional<drivers::capture::SourceHealth> health(HostTime /*now*/) {
     return std::nullopt;
   }
   // Supervision that must run on the owning thread between deliveries (an Ouster re-init swaps

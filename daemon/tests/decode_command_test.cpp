@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -97,6 +98,26 @@ TEST(DecodeCommand, PcdAndUsageErrors) {
   std::getline(empty, header);
   EXPECT_EQ(header, "frame,x,y,z,intensity,t_ns,ring,return");
   EXPECT_FALSE(std::getline(empty, extra));
+}
+
+TEST(DecodeCommand, HesaiWithItsAngleFile) {
+  const auto dir = livod::test::temp_dir("decode_hesai");
+  const std::string capture = livod::test::data_path("hesai/hesai_xt32.pcap").string();
+  const std::string angles = livod::test::data_path("hesai/PandarXT32.csv").string();
+  // The angle correction file is required: no nominal table for a Hesai unit.
+  EXPECT_EQ(run({capture, "--model", "PANDARXT32", "-o", (dir / "a.csv").string()}), 1);
+  ASSERT_EQ(
+      run({capture, "--model", "xt32", "--calibration", angles, "-o", (dir / "b.csv").string()}),
+      0);
+  std::ifstream in(dir / "b.csv");
+  std::string line;
+  std::getline(in, line);
+  std::map<int, std::size_t> rows_per_frame;
+  while (std::getline(in, line)) ++rows_per_frame[std::stoi(line.substr(0, line.find(',')))];
+  // Five scans (a partial turn, three turns, a partial turn); the fourth is nebula's reference
+  // scan (63021 points with the model's default range 0.05-120 m).
+  ASSERT_EQ(rows_per_frame.size(), 5U);
+  EXPECT_EQ(rows_per_frame[3], 63021U);
 }
 
 }  // namespace

@@ -6,7 +6,7 @@
 #include <cerrno>
 #include <utility>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 // Single-writer counters: a plain store publishes the new value (no locked read-modify-write on
@@ -132,4 +132,4 @@ CaptureCounters CaptureThread::counters() const {
   return c;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -21,7 +21,7 @@
 #include "drivers/capture/packet_ring.hpp"
 #include "io/udp_socket.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 struct CaptureThreadConfig {
   std::string thread_name;               // shown by top -H / ps (the kernel keeps 15 characters)
@@ -107,4 +107,4 @@ class CaptureThread {
   std::jthread thread_;  // last: started after every other member is ready, stopped first
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -7,7 +7,7 @@
 
 #include <climits>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 // std::atomic<std::uint32_t> is a plain 32-bit word on Linux (lock-free, standard layout): the
@@ -40,4 +40,4 @@ void Doorbell::wait(std::uint32_t token, Nanoseconds timeout) noexcept {
   sleepers_.fetch_sub(1, std::memory_order_seq_cst);
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

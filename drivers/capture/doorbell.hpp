@@ -1,7 +1,7 @@
 #pragma once
-// livod::drivers::Doorbell - how producers (capture threads, the scheduler) wake a consumer thread
-// that sleeps because its rings are empty, without ever blocking the producer and without a
-// system call while the consumer is busy.
+// livod::drivers::capture::Doorbell - how producers (capture threads, the scheduler) wake a
+// consumer thread that sleeps because its rings are empty, without ever blocking the producer and
+// without a system call while the consumer is busy.
 //
 //   consumer:  token = prepare();  if (nothing queued) wait(token, timeout);
 //   producer:  push into the ring;  ring();
@@ -19,7 +19,7 @@
 
 #include "core/time.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 class Doorbell {
  public:
@@ -43,4 +43,4 @@ class Doorbell {
   std::atomic<std::uint64_t> wakes_{0};  // FUTEX_WAKE calls (for tests and benchmarks)
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 // printf-style append (the drivers library does not link fmt; this runs on the logging thread).
@@ -162,4 +162,4 @@ std::string format_health(const SourceHealth& health) {
   return out;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

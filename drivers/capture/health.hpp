@@ -13,10 +13,10 @@
 
 #include "core/time.hpp"
 #include "drivers/capture/capture_thread.hpp"
-#include "drivers/lidar_decoder.hpp"
 #include "drivers/capture/stream_consumer.hpp"
+#include "drivers/lidar_decoder.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 // Events per second over a sliding window, from a cumulative counter sampled at any cadence.
 // Fixed storage (kMaxSamples): sampled faster than kMaxSamples per window, the effective window
@@ -130,4 +130,4 @@ class StreamMonitor {
 // "os1 [lidar STREAMING 640.0 pkt/s 42.5 Mbit/s age 1 ms] scans 10 gaps 0 kdrop 0 ovr 0 ...".
 [[nodiscard]] std::string format_health(const SourceHealth& health);
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 UdpStream::UdpStream(const UdpStreamConfig& config)
     : name_(config.name),
@@ -51,4 +51,4 @@ SourceHealth LiveSource::update_health(HostTime now) {
   return h;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

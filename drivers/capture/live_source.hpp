@@ -28,7 +28,7 @@
 #include "drivers/lidar_decoder.hpp"
 #include "io/udp_socket.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 struct UdpStreamConfig {
   std::string name;  // "lidar", "imu", "data", "position": shown in health
@@ -102,4 +102,4 @@ class LiveSource {
   std::unique_ptr<StreamConsumer> consumer_;
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

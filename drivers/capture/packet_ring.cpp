@@ -6,7 +6,7 @@
 #include <new>
 #include <stdexcept>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 std::size_t checked_payload_bytes(std::size_t max_payload_bytes) {
@@ -50,4 +50,4 @@ bool PacketRing::try_push(std::span<const std::byte> payload, HostTime rx, std::
   return true;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

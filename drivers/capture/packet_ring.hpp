@@ -1,5 +1,5 @@
 #pragma once
-// livod::drivers::PacketRing - a bounded single-producer/single-consumer queue of raw UDP
+// livod::drivers::capture::PacketRing - a bounded single-producer/single-consumer queue of raw UDP
 // payloads: how a capture thread hands received datagrams to the consumer that decodes them
 // (DESIGN.md "Data flow"). Fixed-size slots (payload bytes up to a maximum chosen at run time,
 // plus length, kernel receive time and destination port), all allocated by the constructor; a full
@@ -28,7 +28,7 @@
 #include "core/spsc_ring.hpp"
 #include "core/time.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 // One queued datagram as the consumer sees it. `payload` points into the ring's arena and stays
 // valid until pop().
@@ -77,4 +77,4 @@ class PacketRing {
   alignas(kCacheLineBytes) std::size_t next_slot_ = 0;
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

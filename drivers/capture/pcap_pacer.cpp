@@ -9,7 +9,7 @@
 #include "io/pcap.hpp"
 #include "io/udp_socket.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 // Longest single sleep, so that a stop request is noticed within this time.
@@ -122,4 +122,4 @@ PaceResult push_pcap_paced(const std::filesystem::path& capture, std::span<const
   return pace(capture, options, stop, route, deliver);
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

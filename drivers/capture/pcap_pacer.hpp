@@ -21,7 +21,7 @@
 #include "drivers/capture/packet_ring.hpp"
 #include "io/input_loss.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 // Written by the pacer as it goes (any thread may read): health of a paced recording.
 struct PaceProgress {
@@ -80,4 +80,4 @@ struct RingRoute {
 PaceResult push_pcap_paced(const std::filesystem::path& capture, std::span<const RingRoute> routes,
                            const PaceOptions& options, const std::stop_token& stop = {});
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 DecoderCounters sum(const DecoderCounters& a, const DecoderCounters& b) {
   DecoderCounters s;
@@ -78,4 +78,4 @@ DecoderCounters StreamConsumer::decoder_counters() const {
   return decoder_ ? sum(retired_, decoder_->counters()) : retired_;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

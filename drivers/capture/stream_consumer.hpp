@@ -16,7 +16,7 @@
 #include "drivers/capture/packet_ring.hpp"
 #include "drivers/lidar_decoder.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 
 struct ConsumerCounters {
   std::uint64_t packets = 0;            // popped from the rings and decoded
@@ -72,4 +72,4 @@ class StreamConsumer {
 // Field-by-field sum (totals over several decoders).
 [[nodiscard]] DecoderCounters sum(const DecoderCounters& a, const DecoderCounters& b);
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -1,30 +1,10 @@
 #include "drivers/livox/livox_decoder.hpp"
 
+#include <algorithm>
+
+#include "core/numeric.hpp"
+
 namespace livod::livox {
-namespace {
-
-std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  std::int64_t q = a / b;
-  if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
-  return q;
-}
-
-}  // namespace
-
-std::optional<LivoxModel> livox_model(const std::string& name) {
-  // Point intervals and lines: sensor-protocols.md 1.3 (SDK1) and 2.3 (SDK2); host ports: the
-  // vendor SDK defaults (SDK1 first device: data and IMU on 56001; SDK2 Mid-360: 56301/56401,
-  // HAP: 57000/58000).
-  if (name == "AVIA" || name == "HORIZON" || name == "TELE-15") {
-    return LivoxModel{name, Protocol::kSdk1, 4167, 6, 56001, 56001};
-  }
-  if (name == "MID-40" || name == "MID-70") {
-    return LivoxModel{name, Protocol::kSdk1, 10000, 1, 56001, 56001};
-  }
-  if (name == "MID-360") return LivoxModel{name, Protocol::kSdk2, 0, 4, 56301, 56401};
-  if (name == "HAP") return LivoxModel{name, Protocol::kSdk2, 0, 6, 57000, 58000};
-  return std::nullopt;
-}
 
 LivoxDecoder::LivoxDecoder(LivoxModel model, LivoxDecoderOptions options)
     : model_(std::move(model)), options_(options) {
@@ -67,6 +47,22 @@ void LivoxDecoder::on_packet(const drivers::PacketView& packet,
   }
   ++counters_.lidar_packets;
 
+  // Clock jumps: the timestamp type changed, the time went back further than any reordering
+  // explains, or it went ahead further than the receive times allow (lost packets take their
+  // time on the link too). The timeline restarts; nothing is counted lost across the jump.
+  bool jumped = false;
+  if (last_packet_end_ns_) {
+    const std::int64_t host_advance =
+        std::max<std::int64_t>(0, packet.host_time_ns - last_packet_host_ns_);
+    const std::int64_t advance = packet_.timestamp_ns - *last_packet_end_ns_;
+    jumped = packet_.time_type != last_time_type_ || advance < -kMaxReorderNs ||
+             advance > host_advance + kMaxUnexplainedAdvanceNs;
+  }
+  if (jumped) {
+    ++counters_.clock_jumps;
+    last_packet_end_ns_.reset();
+  }
+
   // Sequence gaps. A packet older than the newest one seen (reordered or delayed on the link) is
   // not a gap, and the newest one stays the reference; it was counted missing when its successor
   // came, so it takes one back: sequence_gaps counts the packets that never arrived.
@@ -90,6 +86,8 @@ void LivoxDecoder::on_packet(const drivers::PacketView& packet,
   if (!older) {
     last_packet_end_ns_ = packet_.timestamp_ns + packet_.span_ns;
     last_span_ns_ = packet_.span_ns;
+    last_packet_host_ns_ = packet.host_time_ns;
+    last_time_type_ = packet_.time_type;
   }
 
   for (std::uint16_t i = 0; i < packet_.count; ++i) {

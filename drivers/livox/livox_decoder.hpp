@@ -3,7 +3,10 @@
 // scanning is non-repetitive, so a scan is a time window: points are cut into scans of
 // `scan_period_ns` aligned to multiples of the period on the sensor clock (like livox_ros_driver's
 // 10 Hz frames). SDK2 sequence gaps come from udp_cnt; SDK1 has no counter, so a gap is a packet
-// timestamp further than 1.5 packet spans after the previous one.
+// timestamp further than 1.5 packet spans after the previous one, and the count is bounded by
+// what the receive times allow: a sensor-time advance more than kMaxUnexplainedAdvanceNs beyond
+// the receive-time advance, a step back of more than kMaxReorderNs, or a change of timestamp type
+// is a clock jump (PTP/GPS sync gained, reset), counted in clock_jumps, never as lost packets.
 
 #include <cstdint>
 #include <limits>
@@ -26,7 +29,8 @@ struct LivoxModel {
   std::uint16_t imu_port = 56001;
 };
 
-// nullopt for an unknown model name.
+// The model's decoder facts from the Livox family tables (livox_family.cpp; names matched as
+// drivers::normalise_model_name does); nullopt for an unknown model name.
 std::optional<LivoxModel> livox_model(const std::string& name);
 
 struct LivoxDecoderOptions {
@@ -55,7 +59,7 @@ class LivoxDecoder final : public drivers::LidarDecoder {
   LivoxModel model_;
   LivoxDecoderOptions options_;
   drivers::DecoderCounters counters_;
-  std::array<std::uint64_t, 6> error_counts_{};
+  std::array<std::uint64_t, kDecodeErrorKinds> error_counts_{};
   LivoxPacket packet_;
   LidarScan scan_;
   bool scan_open_ = false;
@@ -67,6 +71,13 @@ class LivoxDecoder final : public drivers::LidarDecoder {
   std::uint32_t next_sequence_ = 0;
   std::optional<std::uint16_t> last_udp_cnt_;
   std::optional<std::int64_t> last_packet_end_ns_;
+  std::int64_t last_packet_host_ns_ = 0;
+  std::uint8_t last_time_type_ = 0;
+  // How far the sensor timestamps may run ahead of the receive stamps between two packets before
+  // the difference is a clock jump: generous for bursty delivery and coarse capture stamps.
+  static constexpr std::int64_t kMaxUnexplainedAdvanceNs = 1'000'000'000;
+  // Packets delivered this much older than the newest one are a clock step back, not reordering.
+  static constexpr std::int64_t kMaxReorderNs = 100'000'000;
   std::int32_t last_span_ns_ = 0;
 };
 

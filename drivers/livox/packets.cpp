@@ -113,6 +113,8 @@ const char* to_string(DecodeError e) {
       return "CRC-32 mismatch";
     case DecodeError::kBadTime:
       return "invalid timestamp fields";
+    case DecodeError::kBadVersion:
+      return "not a Livox data packet (version byte)";
   }
   return "unknown";
 }
@@ -120,13 +122,17 @@ const char* to_string(DecodeError e) {
 DecodeError decode_sdk1(std::span<const std::byte> d, std::uint32_t point_interval_ns,
                         std::uint8_t lines, LivoxPacket& out) {
   if (d.size() < kSdk1HeaderBytes) return DecodeError::kTooShort;
+  if (static_cast<std::uint8_t>(d[0]) != kSdk1Version) return DecodeError::kBadVersion;
   Sdk1Layout layout{};
   out.data_type = static_cast<std::uint8_t>(d[9]);
   if (!sdk1_layout(out.data_type, layout)) return DecodeError::kUnknownDataType;
-  if (d.size() < kSdk1HeaderBytes + layout.points * layout.point_bytes)
-    return DecodeError::kTooShort;
+  // Every SDK1 data type has one fixed datagram length; a longer or shorter one is not SDK1.
+  const std::size_t expected = kSdk1HeaderBytes + layout.points * layout.point_bytes;
+  if (d.size() < expected) return DecodeError::kTooShort;
+  if (d.size() != expected) return DecodeError::kLengthMismatch;
   out.status = read_le<std::uint32_t>(d, 4);
   out.time_type = static_cast<std::uint8_t>(d[8]);
+  if (out.time_type == 2 || out.time_type > 4) return DecodeError::kBadTime;  // 2 is reserved
   if (out.time_type == 3) {
     const int year = 2000 + static_cast<int>(d[10]);
     const auto month = static_cast<unsigned>(d[11]);
@@ -189,8 +195,9 @@ DecodeError decode_sdk1(std::span<const std::byte> d, std::uint32_t point_interv
 
 DecodeError decode_sdk2(std::span<const std::byte> d, std::uint8_t lines, LivoxPacket& out) {
   if (d.size() < kSdk2HeaderBytes) return DecodeError::kTooShort;
+  if (static_cast<std::uint8_t>(d[0]) != kSdk2Version) return DecodeError::kBadVersion;
   const auto length = read_le<std::uint16_t>(d, 1);
-  if (length < kSdk2HeaderBytes || length > d.size()) return DecodeError::kLengthMismatch;
+  if (length != d.size()) return DecodeError::kLengthMismatch;
   const auto interval = read_le<std::uint16_t>(d, 3);
   const auto dot_num = read_le<std::uint16_t>(d, 5);
   out.udp_cnt = read_le<std::uint16_t>(d, 7);
@@ -216,8 +223,8 @@ DecodeError decode_sdk2(std::span<const std::byte> d, std::uint8_t lines, LivoxP
       return DecodeError::kUnknownDataType;
   }
   const std::size_t n = out.data_type == 0 ? 1 : dot_num;
-  if (n > kMaxPointsPerPacket) return DecodeError::kLengthMismatch;
-  if (length < kSdk2HeaderBytes + n * point_bytes) return DecodeError::kLengthMismatch;
+  if (n == 0 || n > kMaxPointsPerPacket) return DecodeError::kLengthMismatch;
+  if (length != kSdk2HeaderBytes + n * point_bytes) return DecodeError::kLengthMismatch;
   const auto crc = read_le<std::uint32_t>(d, 24);
   if (crc != 0 && crc32_standard(d.subspan(28, length - 28U)) != crc) return DecodeError::kBadCrc;
   out.timestamp_ns = static_cast<std::int64_t>(read_le<std::uint64_t>(d, 28));

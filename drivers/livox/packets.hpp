@@ -12,12 +12,15 @@
 
 #include <Eigen/Core>
 
+#include "core/units.hpp"
+
 namespace livod::livox {
 
-inline constexpr double kStandardGravity = 9.80665;  // m/s^2 per g (Livox IMUs report g)
 inline constexpr std::size_t kMaxPointsPerPacket = 100;
 inline constexpr std::size_t kSdk1HeaderBytes = 18;
 inline constexpr std::size_t kSdk2HeaderBytes = 36;
+inline constexpr std::uint8_t kSdk1Version = 5;  // byte 0 of every SDK1 data packet
+inline constexpr std::uint8_t kSdk2Version = 0;
 
 struct LivoxPoint {
   float x = 0, y = 0, z = 0;  // metres, LiDAR frame (x forward)
@@ -45,16 +48,32 @@ struct LivoxPacket {
   Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();
 };
 
-enum class DecodeError { kNone, kTooShort, kUnknownDataType, kLengthMismatch, kBadCrc, kBadTime };
+// kBadVersion: the version byte is not the protocol's (SDK1 data packets carry 5, SDK2 0), i.e.
+// the datagram is not a Livox data packet at all (another sensor on the port).
+enum class DecodeError {
+  kNone,
+  kTooShort,
+  kUnknownDataType,
+  kLengthMismatch,
+  kBadCrc,
+  kBadTime,
+  kBadVersion,
+};
+inline constexpr std::size_t kDecodeErrorKinds = 7;
 const char* to_string(DecodeError e);
 
 // SDK1: `point_interval_ns` is 10000 for Mid-40/70 and 4167 for Avia/Horizon/Tele-15;
-// `lines` is 1 for Mid-40/70 and 6 for the others.
+// `lines` is 1 for Mid-40/70 and 6 for the others. A datagram is accepted only if it is an SDK1
+// data packet: version byte 5, a known data type, a defined timestamp type (0, 1, 3, 4) and
+// exactly the length of that data type (18 + N x point size); anything else (another sensor's
+// traffic on the port) is an error and yields no points.
 DecodeError decode_sdk1(std::span<const std::byte> payload, std::uint32_t point_interval_ns,
                         std::uint8_t lines, LivoxPacket& out);
 
 // SDK2: `lines` is 4 for Mid-360 and 6 for HAP. A zero CRC field means "not computed" (real
-// Mid-360 point packets carry 0) and is accepted; otherwise the CRC-32 must match.
+// Mid-360 point packets carry 0) and is accepted; otherwise the CRC-32 must match. The version
+// byte must be 0, the length field must equal the datagram's length, and that length must be
+// exactly the header plus dot_num points of the data type (IMU: one sample).
 DecodeError decode_sdk2(std::span<const std::byte> payload, std::uint8_t lines, LivoxPacket& out);
 
 // Encoders. Points are given in metres; encoding quantises to the wire format's resolution.

@@ -5,7 +5,7 @@
 #include <array>
 #include <utility>
 
-namespace livod::drivers {
+namespace livod::livox {
 namespace {
 
 io::UdpSocketConfig control_socket_config(const std::string& address, std::uint16_t port) {
@@ -22,7 +22,7 @@ io::UdpSocketConfig control_socket_config(const std::string& address, std::uint1
 }  // namespace
 
 LivoxSupervisor::LivoxSupervisor(LivoxSupervisorConfig config,
-                                 std::vector<const UdpStream*> data_streams)
+                                 std::vector<const drivers::capture::UdpStream*> data_streams)
     : device_config_(std::move(config.device)),
       data_streams_(std::move(data_streams)),
       tick_period_ms_(config.tick_period_ms > 0 ? config.tick_period_ms : 50),
@@ -63,7 +63,7 @@ livox::DeviceCounters LivoxSupervisor::counters() const {
   return counters_;
 }
 
-void LivoxSupervisor::annotate(SourceHealth& health) const {
+void LivoxSupervisor::annotate(drivers::capture::SourceHealth& health) const {
   health.device_state = livox::to_string(state());
   health.reconnects = counters().reconnects;
 }
@@ -90,7 +90,7 @@ void LivoxSupervisor::run(const std::stop_token& stop) {
     }
     // Data activity keeps the device alive (and completes a start whose ACK was lost).
     for (std::size_t i = 0; i < data_streams_.size(); ++i) {
-      const CaptureCounters c = data_streams_[i]->counters();
+      const drivers::capture::CaptureCounters c = data_streams_[i]->counters();
       if (c.datagrams != seen_datagrams[i]) {
         seen_datagrams[i] = c.datagrams;
         device.on_data(HostTime(c.last_rx_ns));
@@ -111,4 +111,4 @@ void LivoxSupervisor::run(const std::stop_token& stop) {
   }
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::livox

@@ -24,7 +24,7 @@
 #include "drivers/livox/device.hpp"
 #include "io/udp_socket.hpp"
 
-namespace livod::drivers {
+namespace livod::livox {
 
 struct LivoxSupervisorConfig {
   // host_ip must be the address the LiDAR can reach the host at. Ports left at 0 are filled in:
@@ -42,7 +42,8 @@ class LivoxSupervisor {
  public:
   // `data_streams` carry the LiDAR's point/IMU packets; they must outlive the supervisor. Binds
   // the sockets (throws livod::Error) and starts the control thread.
-  LivoxSupervisor(LivoxSupervisorConfig config, std::vector<const UdpStream*> data_streams);
+  LivoxSupervisor(LivoxSupervisorConfig config,
+                  std::vector<const drivers::capture::UdpStream*> data_streams);
   ~LivoxSupervisor();
   LivoxSupervisor(const LivoxSupervisor&) = delete;
   LivoxSupervisor& operator=(const LivoxSupervisor&) = delete;
@@ -55,7 +56,7 @@ class LivoxSupervisor {
   // The device configuration in use (ports filled in).
   [[nodiscard]] const livox::DeviceConfig& device_config() const { return device_config_; }
   // Writes device_state and reconnects into a source's health.
-  void annotate(SourceHealth& health) const;
+  void annotate(drivers::capture::SourceHealth& health) const;
 
   // Stops and joins the control thread. Idempotent.
   void stop();
@@ -65,7 +66,7 @@ class LivoxSupervisor {
   void receive(io::UdpSocket& socket, livox::LivoxDevice& device);
 
   livox::DeviceConfig device_config_;
-  std::vector<const UdpStream*> data_streams_;
+  std::vector<const drivers::capture::UdpStream*> data_streams_;
   int tick_period_ms_;
   io::UdpSocket command_socket_;
   std::optional<io::UdpSocket> broadcast_socket_;
@@ -79,4 +80,4 @@ class LivoxSupervisor {
   std::jthread thread_;  // last: started once everything else is ready
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::livox

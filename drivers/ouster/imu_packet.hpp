@@ -11,11 +11,10 @@
 #include <span>
 #include <string_view>
 
+#include "core/units.hpp"
 #include "drivers/ouster/packet_format.hpp"
 
 namespace livod::drivers::ouster {
-
-inline constexpr double kStandardGravity = 9.80665;  // m/s^2 per g, as the SDK converts
 
 struct ImuMeasurement {
   // The instant the sample describes, sensor clock ns: gyro_ts for LEGACY (ouster-ros stamps

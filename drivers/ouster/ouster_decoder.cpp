@@ -1,9 +1,11 @@
 #include "drivers/ouster/ouster_decoder.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <utility>
 
 #include "core/error.hpp"
+#include "drivers/ouster/ouster_family.hpp"
 
 namespace livod::drivers::ouster {
 namespace {
@@ -52,8 +54,10 @@ OusterDecoder::OusterDecoder(SensorMetadata metadata, OusterDecoderOptions optio
 
 std::vector<std::uint16_t> OusterDecoder::default_ports() const {
   std::vector<std::uint16_t> ports;
-  const std::uint16_t lidar = metadata_.udp_port_lidar.value_or(7502);
-  const std::uint16_t imu = metadata_.udp_port_imu.value_or(7503);
+  // Without ports in the metadata: the family table's defaults (ouster_family.cpp).
+  const UdpPorts& defaults = ouster_family().models.front().ports;
+  const std::uint16_t lidar = metadata_.udp_port_lidar.value_or(defaults.lidar);
+  const std::uint16_t imu = metadata_.udp_port_imu.value_or(defaults.imu);
   // Port 0 means "stream disabled" in the sensor config (e.g. imu_zm_no_lidar).
   if (lidar != 0) ports.push_back(lidar);
   if (imu != 0 && imu != lidar) ports.push_back(imu);
@@ -68,6 +72,32 @@ bool OusterDecoder::in_window(std::uint32_t column) const {
   const ColumnWindow& w = metadata_.format.column_window;
   return w.first <= w.last ? (column >= w.first && column <= w.last)
                            : (column >= w.first || column <= w.last);
+}
+
+std::uint32_t OusterDecoder::window_columns_before(std::uint32_t column) const {
+  const ColumnWindow& w = metadata_.format.column_window;
+  if (w.first <= w.last) {
+    if (column <= w.first) return 0;
+    return std::min(column, w.last + 1) - w.first;
+  }
+  // [0, last] then [first, W-1] in measurement order.
+  const std::uint32_t low = std::min(column, w.last + 1);
+  const std::uint32_t high = column > w.first ? column - w.first : 0;
+  return low + high;
+}
+
+std::uint32_t OusterDecoder::window_packets_before(std::uint32_t packet) const {
+  std::uint32_t n = 0;
+  const std::uint32_t per_packet = format_.columns_per_packet;
+  for (std::uint32_t p = 0; p < packet; ++p) {
+    for (std::uint32_t c = p * per_packet; c < (p + 1) * per_packet; ++c) {
+      if (in_window(c)) {
+        ++n;
+        break;
+      }
+    }
+  }
+  return n;
 }
 
 void OusterDecoder::count_error(PacketError error) {
@@ -241,6 +271,7 @@ void OusterDecoder::open_frame(std::uint32_t frame_id) {
   frame_ = Frame{};
   frame_.open = true;
   frame_.frame_id = frame_id;
+  frame_.continues = last_closed_frame_id_.has_value();
   scan_.clear();
 }
 
@@ -314,19 +345,46 @@ void OusterDecoder::add_columns(const LidarPacket& packet, std::int64_t host_tim
     }
     frame_.valid_points += points;
   }
-  if (packet_in_window) ++frame_.window_packets;
+  if (packet_in_window) {
+    ++frame_.window_packets;
+    const std::uint32_t index = packet.measurement_id(0) / format_.columns_per_packet;
+    if (!frame_.have_window_packet) frame_.first_window_packet = index;
+    frame_.have_window_packet = true;
+    frame_.last_window_packet = index;
+  }
 }
 
-void OusterDecoder::close_frame(const DecoderSinks& sinks) {
+void OusterDecoder::close_frame(const DecoderSinks& sinks, bool at_end) {
   if (!frame_.open) return;
   frame_.open = false;
   last_closed_frame_id_ = frame_.frame_id;
   const bool complete = frame_.window_columns >= window_size_;
   if (!complete) {
     ++counters_.incomplete_scans;
-    ouster_counters_.missing_columns += window_size_ - frame_.window_columns;
-    if (frame_.window_packets < window_packet_slots_) {
-      counters_.sequence_gaps += window_packet_slots_ - frame_.window_packets;
+    // Columns and packets that were due: not those before the first packet of a capture (or of
+    // a run after a re-init), nor those after the last packet of a capture.
+    std::uint32_t due_columns = window_size_;
+    std::uint32_t due_packets = window_packet_slots_;
+    if (frame_.have_window_packet) {
+      const std::uint32_t per_packet = format_.columns_per_packet;
+      if (!frame_.continues) {
+        due_columns -= window_columns_before(frame_.first_window_packet * per_packet);
+        due_packets -= window_packets_before(frame_.first_window_packet);
+      }
+      if (at_end) {
+        const std::uint32_t end_packet = frame_.last_window_packet + 1;
+        due_columns -= window_size_ - window_columns_before(end_packet * per_packet);
+        due_packets -= window_packet_slots_ - window_packets_before(end_packet);
+      }
+    } else if (!frame_.continues || at_end) {
+      due_columns = 0;
+      due_packets = 0;
+    }
+    if (frame_.window_columns < due_columns) {
+      ouster_counters_.missing_columns += due_columns - frame_.window_columns;
+    }
+    if (frame_.window_packets < due_packets) {
+      counters_.sequence_gaps += due_packets - frame_.window_packets;
     }
   }
   if (frame_.valid_columns == 0) {
@@ -354,7 +412,7 @@ void OusterDecoder::discard_frame() {
 }
 
 void OusterDecoder::flush(const DecoderSinks& sinks) {
-  close_frame(sinks);
+  close_frame(sinks, true);
 }
 
 }  // namespace livod::drivers::ouster

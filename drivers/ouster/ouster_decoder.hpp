@@ -65,7 +65,7 @@ struct OusterCounters {
   std::uint64_t serial_mismatches = 0;    // packets from another sensor (prod_sn differs)
   std::uint64_t init_id_changes = 0;      // the sensor re-initialised while streaming
   std::uint64_t frame_id_gaps = 0;        // frames skipped entirely (frame_id jumped)
-  std::uint64_t missing_columns = 0;      // column-window columns never received
+  std::uint64_t missing_columns = 0;      // column-window columns due but never received
   std::uint64_t late_packets = 0;         // packets of a frame already emitted, or out of order
   std::uint64_t dropped_incomplete_scans = 0;  // incomplete scans not published (kDrop)
   std::uint64_t invalid_columns = 0;           // column-window columns with status bit 0 clear
@@ -118,16 +118,26 @@ class OusterDecoder final : public LidarDecoder {
     std::uint32_t valid_columns = 0;        // columns that produced points
     std::uint64_t valid_points = 0;
     std::int32_t last_offset_ns = 0;  // offset of the latest valid column
+    // The previous frame of this run was seen, so columns missing before this frame's first
+    // packet were lost (for the first frame of a capture or after a re-init they were never due).
+    bool continues = false;
+    bool have_window_packet = false;
+    std::uint32_t first_window_packet = 0;  // packet index (measurement_id / columns per packet)
+    std::uint32_t last_window_packet = 0;
   };
 
   void on_lidar(const PacketView& packet, const DecoderSinks& sinks);
   void on_imu(const PacketView& packet, const DecoderSinks& sinks);
   void count_error(PacketError error);
   void open_frame(std::uint32_t frame_id);
-  void close_frame(const DecoderSinks& sinks);
+  // at_end: the capture ended (flush), so the columns after the last packet were never due.
+  void close_frame(const DecoderSinks& sinks, bool at_end = false);
   void discard_frame();
   void add_columns(const LidarPacket& packet, std::int64_t host_time_ns);
   [[nodiscard]] bool in_window(std::uint32_t column) const;
+  // Window columns / window packets measured before column `column` / packet `packet` of a frame.
+  [[nodiscard]] std::uint32_t window_columns_before(std::uint32_t column) const;
+  [[nodiscard]] std::uint32_t window_packets_before(std::uint32_t packet) const;
 
   SensorMetadata metadata_;
   OusterDecoderOptions options_;

@@ -31,10 +31,13 @@ constexpr ProfileLayout make_layout(std::size_t block_size, std::uint8_t returns
 
 using F = ChannelField;
 
+// LEGACY REFLECTIVITY is the 16-bit word at bits 32-47: firmware up to 2.0 fills all 16 bits
+// (values above 255 are common), 2.1 and later write 8-bit calibrated reflectivity and leave the
+// high byte 0. Reading only 8 bits wrapped the old firmware's values modulo 256 (issue 13).
 constexpr ProfileLayout kLegacyLayout = make_layout<8>(12, 1,
                                                        {{{F::kRange, 0, 20},
                                                          {F::kFlags, 28, 4},
-                                                         {F::kReflectivity, 32, 8},
+                                                         {F::kReflectivity, 32, 16},
                                                          {F::kSignal, 48, 16},
                                                          {F::kNearIr, 64, 16},
                                                          {F::kRaw32Word1, 0, 32},

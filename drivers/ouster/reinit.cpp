@@ -6,7 +6,7 @@
 #include "core/error.hpp"
 #include "drivers/ouster/sensor_api.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::ouster {
 
 OusterMetadataFetcher::OusterMetadataFetcher(OusterMetadataFetcherConfig config)
     : config_(std::move(config)) {
@@ -95,7 +95,7 @@ void OusterReinitHandler::ask(HostTime now) {
   last_request_ = now;
 }
 
-void OusterReinitHandler::maintain(StreamConsumer& consumer, HostTime now) {
+void OusterReinitHandler::maintain(capture::StreamConsumer& consumer, HostTime now) {
   // No decoder yet (no metadata file; the sensor was unreachable at start): fetch until it answers.
   auto* decoder =
       consumer.has_decoder() ? dynamic_cast<ouster::OusterDecoder*>(&consumer.decoder()) : nullptr;
@@ -124,9 +124,9 @@ void OusterReinitHandler::maintain(StreamConsumer& consumer, HostTime now) {
   }
 }
 
-void OusterReinitHandler::note_health(SourceHealth& health) {
+void OusterReinitHandler::note_health(capture::SourceHealth& health) {
   std::uint64_t recoveries = 0;
-  for (const StreamHealth& s : health.streams) recoveries += s.recoveries;
+  for (const capture::StreamHealth& s : health.streams) recoveries += s.recoveries;
   if (recoveries > seen_recoveries_) recovered_ = true;
   seen_recoveries_ = recoveries;
   health.sensor_reinits = sensor_reinits();
@@ -138,4 +138,4 @@ std::uint64_t OusterReinitHandler::sensor_reinits() const {
   return retired_reinits_ + current_reinits_;
 }
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::ouster

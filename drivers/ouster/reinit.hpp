@@ -27,7 +27,7 @@
 #include "drivers/ouster/metadata.hpp"
 #include "drivers/ouster/ouster_decoder.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::ouster {
 
 struct OusterMetadataFetcherConfig {
   std::string host;  // the sensor's address
@@ -84,11 +84,11 @@ class OusterReinitHandler {
   // OusterDecoder reports a re-initialised sensor, or when the consumer has no decoder yet (the
   // daemon started without a metadata file and the sensor has not answered), and installs a new
   // decoder once it arrives. Does nothing if the consumer's decoder is not an OusterDecoder.
-  void maintain(StreamConsumer& consumer, HostTime now);
+  void maintain(capture::StreamConsumer& consumer, HostTime now);
 
   // Consumer thread, with the source's latest health: a stream that recovered from STALE asks for
   // fresh metadata; writes sensor_reinits, metadata_refreshes and last_error into `health`.
-  void note_health(SourceHealth& health);
+  void note_health(capture::SourceHealth& health);
 
   [[nodiscard]] std::uint64_t sensor_reinits() const;
   [[nodiscard]] std::uint64_t metadata_refreshes() const { return refreshes_; }
@@ -109,4 +109,4 @@ class OusterReinitHandler {
   std::string last_error_;
 };
 
-}  // namespace livod::drivers
+}  // namespace livod::drivers::ouster

@@ -6,9 +6,9 @@ namespace livod::drivers::ouster {
 
 std::string fetch_metadata_json(const std::string& host, std::uint16_t port,
                                 std::chrono::milliseconds timeout) {
-  HttpGetOptions options;
+  io::HttpGetOptions options;
   options.timeout = timeout;
-  HttpResponse r = http_get(host, port, std::string(kMetadataPath), options);
+  io::HttpResponse r = io::http_get(host, port, std::string(kMetadataPath), options);
   if (r.status != 200) {
     throw livod::Error("HTTP GET http://" + host + ":" + std::to_string(port) +
                        std::string(kMetadataPath) + ": status " + std::to_string(r.status) + " " +

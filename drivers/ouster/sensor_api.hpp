@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <string>
 
-#include "drivers/ouster/http_client.hpp"
 #include "drivers/ouster/metadata.hpp"
+#include "io/http_client.hpp"
 
 namespace livod::drivers::ouster {
 

@@ -15,6 +15,14 @@ constexpr double kCentidegToRad = kPi / 18000.0;
 // in-packet rate means the azimuth went backwards (a stationary or stopping head).
 constexpr double kMaxRateCentidegPerNs = 30.0 * 36000.0 * 1e-9;
 constexpr int kVeloViewMedianIndex = wire::kBlocksPerPacket / 2;
+// An azimuth step between firing sequences larger than twice the expected one plus this margin is
+// a jump (the skipped sector of a reduced field of view); steps that look like a small backward
+// move (a slowing or stationary head) are not.
+constexpr double kJumpMarginCentideg = 100.0;
+constexpr int kBackwardToleranceCentideg = 1000;
+// Below 1 rev/s the rate cannot date the blocks after a jump.
+constexpr double kMinDatingRateCentidegPerNs = 36000.0 * 1e-9;
+constexpr std::int64_t kUndatable = std::numeric_limits<std::int64_t>::min();
 
 // cos/sin of a small angle (|d| < 0.03 rad here): the series error is below 1e-15.
 inline void small_angle_cos_sin(double d, double& c, double& s) {
@@ -88,8 +96,27 @@ double DataPacketDecoder::veloview_azimuth_diff(const DataPacketResult& r) const
   return diffs[kVeloViewMedianIndex];
 }
 
+std::optional<double> DataPacketDecoder::median_sequence_rate(const DataPacketResult& r) const {
+  std::array<double, wire::kBlocksPerPacket> rates{};
+  std::size_t n = 0;
+  for (int b = 1; b < r.blocks_used; ++b) {
+    const std::int32_t dt =
+        timing_.block_reference_ns(r.dual, b) - timing_.block_reference_ns(r.dual, b - 1);
+    if (dt <= 0) continue;
+    const int step = (36000 + r.block_azimuth[static_cast<std::size_t>(b)] -
+                      r.block_azimuth[static_cast<std::size_t>(b - 1)]) %
+                     36000;
+    if (step >= 36000 - kBackwardToleranceCentideg) continue;
+    rates[n++] = step / static_cast<double>(dt);
+  }
+  if (n < 3) return std::nullopt;
+  std::nth_element(rates.begin(), rates.begin() + static_cast<std::ptrdiff_t>(n / 2),
+                   rates.begin() + static_cast<std::ptrdiff_t>(n));
+  return rates[n / 2];
+}
+
 DataPacketResult DataPacketDecoder::decode(std::span<const std::byte> payload, double fallback_rate,
-                                           std::span<DecodedReturn> out) const {
+                                           std::span<DecodedReturn> out, double dating_rate) const {
   DataPacketResult r;
   if (payload.size() != wire::kDataPacketSize || out.size() < kMaxReturns) return r;
 
@@ -123,18 +150,59 @@ DataPacketResult DataPacketDecoder::decode(std::span<const std::byte> payload, d
     r.block_azimuth[static_cast<std::size_t>(b)] = azimuth;
   }
 
-  // Mean rotation rate from the first block to the last block of a later firing sequence.
-  const int last = r.blocks_used - 1;
-  const std::int32_t span_ns =
-      timing_.block_reference_ns(r.dual, last) - timing_.block_reference_ns(r.dual, 0);
+  // Azimuth discontinuities between consecutive firing sequences (a reduced field of view), and
+  // the rotation rate. Without a jump the rate is the mean from the first block to the last
+  // block of a later firing sequence; with one, the median of the per-sequence rates (the jump
+  // would inflate the mean).
   double rate = std::isfinite(fallback_rate) ? fallback_rate : 0.0;
-  if (span_ns > 0) {
-    const int diff =
-        (36000 + r.block_azimuth[static_cast<std::size_t>(last)] - r.block_azimuth[0]) % 36000;
-    const double measured = diff / static_cast<double>(span_ns);
-    if (measured <= kMaxRateCentidegPerNs) {
-      r.azimuth_rate = measured;
-      rate = measured;
+  const std::optional<double> median_rate = median_sequence_rate(r);
+  const double reference_rate = median_rate.value_or(rate);
+  const double date_with = std::isfinite(dating_rate) && dating_rate > kMinDatingRateCentidegPerNs
+                               ? dating_rate
+                               : reference_rate;
+  std::int64_t delay_ns = 0;
+  for (int b = 1; b < r.blocks_used; ++b) {
+    const std::int32_t dt =
+        timing_.block_reference_ns(r.dual, b) - timing_.block_reference_ns(r.dual, b - 1);
+    if (dt > 0) {
+      const int step = (36000 + r.block_azimuth[static_cast<std::size_t>(b)] -
+                        r.block_azimuth[static_cast<std::size_t>(b - 1)]) %
+                       36000;
+      const double expected = reference_rate * dt;
+      if (step > 2.0 * expected + kJumpMarginCentideg &&
+          step < 36000 - kBackwardToleranceCentideg) {
+        ++r.azimuth_jumps;
+        r.jump_from_azimuth = r.block_azimuth[static_cast<std::size_t>(b - 1)];
+        r.jump_to_azimuth = r.block_azimuth[static_cast<std::size_t>(b)];
+        if (date_with > kMinDatingRateCentidegPerNs) {
+          delay_ns += std::llround((step - date_with * dt) / date_with);
+        } else {
+          delay_ns = kUndatable;
+        }
+      }
+    }
+    r.block_delay_ns[static_cast<std::size_t>(b)] =
+        delay_ns == kUndatable || delay_ns > std::numeric_limits<std::int32_t>::max() / 2
+            ? kUndatableDelay
+            : static_cast<std::int32_t>(delay_ns);
+  }
+  const int last = r.blocks_used - 1;
+  if (r.azimuth_jumps > 0) {
+    if (median_rate && *median_rate <= kMaxRateCentidegPerNs) {
+      r.azimuth_rate = median_rate;
+      rate = *median_rate;
+    }
+  } else {
+    const std::int32_t span_ns =
+        timing_.block_reference_ns(r.dual, last) - timing_.block_reference_ns(r.dual, 0);
+    if (span_ns > 0) {
+      const int diff =
+          (36000 + r.block_azimuth[static_cast<std::size_t>(last)] - r.block_azimuth[0]) % 36000;
+      const double measured = diff / static_cast<double>(span_ns);
+      if (measured <= kMaxRateCentidegPerNs) {
+        r.azimuth_rate = measured;
+        rate = measured;
+      }
     }
   }
   const double rate_rad_per_ns = rate * kCentidegToRad;
@@ -144,6 +212,13 @@ DataPacketResult DataPacketDecoder::decode(std::span<const std::byte> payload, d
   std::size_t n = 0;
   for (int b = 0; b < r.blocks_used; ++b) {
     r.block_begin[static_cast<std::size_t>(b)] = static_cast<std::uint16_t>(n);
+    const std::int32_t block_delay = r.block_delay_ns[static_cast<std::size_t>(b)];
+    if (block_delay == kUndatableDelay) {
+      ++r.undated_blocks;
+      continue;
+    }
+    r.last_block_time_ns = timing_.block_reference_ns(r.dual, b) + block_delay;
+    r.last_block_azimuth = r.block_azimuth[static_cast<std::size_t>(b)];
     const std::size_t base = static_cast<std::size_t>(b) * wire::kBlockSize;
     const std::uint16_t block_azimuth = r.block_azimuth[static_cast<std::size_t>(b)];
     const double theta = block_azimuth * kCentidegToRad;
@@ -232,7 +307,7 @@ DataPacketResult DataPacketDecoder::decode(std::span<const std::byte> payload, d
       p.z = static_cast<float>(d * l.sin_vert + l.vert_offset_m * l.cos_vert);
       p.distance_m = static_cast<float>(d);
       p.azimuth_rad = static_cast<float>(azimuth_rad);
-      p.t_offset_ns = t_ns;
+      p.t_offset_ns = t_ns + block_delay;
       p.laser = static_cast<std::uint16_t>(laser);
       p.ring = l.ring;
       p.intensity = intensity;

@@ -12,6 +12,10 @@
 // * Zero ranges ("no return") are dropped and counted, as are ranges outside (min, max].
 // * Per-point azimuth is interpolated from the block azimuth with the packet's mean rotation
 //   rate and the firing time of the point (§4.3).
+// * Per-point time follows the firing time: the timing table, plus, after an azimuth jump inside
+//   the packet (the boundary packet of a reduced field of view), the time the head needed to
+//   turn through the skipped sector (block_delay_ns). Without a usable rotation rate such blocks
+//   cannot be dated: they are dropped and counted (undated_blocks).
 // * Dual return: the odd block of a pair repeats the even block's firings; an odd-block return
 //   with the same raw distance as its partner is a duplicate and is dropped. return_index 0 is
 //   the stronger return of the pair (ties: the nearer one), 1 the other; single-return
@@ -87,7 +91,23 @@ struct DataPacketResult {
   std::uint16_t zero_ranges = 0;
   std::uint16_t duplicates = 0;
   std::uint16_t out_of_range = 0;
+  std::uint8_t undated_blocks = 0;  // blocks after a jump with no rotation rate to date them
+  // Firing delay of each block beyond the timing table (ns). Non-zero only after an azimuth
+  // discontinuity inside the packet: a sensor with a reduced field of view (FOV setting) pauses
+  // outside its window and fills the remaining blocks of the boundary packet when the window
+  // reopens, so those blocks fire (skipped sector / rotation rate) later than the table says.
+  std::array<std::int32_t, wire::kBlocksPerPacket> block_delay_ns{};
+  std::uint8_t azimuth_jumps = 0;       // discontinuities found in this packet
+  std::uint16_t jump_from_azimuth = 0;  // the last one: block azimuths before and after it
+  std::uint16_t jump_to_azimuth = 0;
+  // Time of the last used block (its firing sequence's reference instant, delay included) from
+  // the packet timestamp: the next packet continues from there.
+  std::int32_t last_block_time_ns = 0;
+  std::uint16_t last_block_azimuth = 0;
 };
+
+// block_delay_ns of a block after a jump that no rotation rate can date.
+inline constexpr std::int32_t kUndatableDelay = std::numeric_limits<std::int32_t>::max();
 
 class DataPacketDecoder {
  public:
@@ -98,8 +118,12 @@ class DataPacketDecoder {
 
   // Decodes one payload into `out` (capacity >= kMaxReturns). `fallback_rate` (0.01 degree per
   // ns) is used when the packet holds a single firing sequence (VLS-128 dual return).
+  // `dating_rate` (same unit; 0 = none) dates the blocks after an azimuth jump: a rate averaged
+  // over many packets is far more precise than one packet's (whose azimuths are quantised to
+  // 0.01 degree); without it the packet's median sequence rate is used.
   [[nodiscard]] DataPacketResult decode(std::span<const std::byte> payload, double fallback_rate,
-                                        std::span<DecodedReturn> out) const;
+                                        std::span<DecodedReturn> out,
+                                        double dating_rate = 0.0) const;
 
   [[nodiscard]] Model model() const { return model_; }
   [[nodiscard]] const FiringTiming& timing() const { return timing_; }
@@ -118,6 +142,9 @@ class DataPacketDecoder {
 
   [[nodiscard]] int laser_of(std::uint16_t flag, int channel) const;
   [[nodiscard]] double veloview_azimuth_diff(const DataPacketResult& r) const;
+  // Median azimuth rate over consecutive firing sequences (0.01 degree per ns); nullopt when the
+  // packet has fewer than three sequence transitions.
+  [[nodiscard]] std::optional<double> median_sequence_rate(const DataPacketResult& r) const;
 
   Model model_;
   DecodeSettings settings_;

@@ -1,7 +1,8 @@
 #include "drivers/velodyne/model.hpp"
 
+#include "drivers/lidar_family.hpp"
+
 #include <array>
-#include <cctype>
 #include <string>
 
 namespace livod::drivers::velodyne {
@@ -19,16 +20,6 @@ constexpr std::array<ModelTraits, 5> kModels{{
     {Model::kVls128, "VLS-128", 128, 0.004, 0xA1, 6253.9, 6253.9 * kReturnsPerPacket},
 }};
 
-std::string normalised(std::string_view name) {
-  std::string out;
-  out.reserve(name.size());
-  for (const char c : name) {
-    if (c == '-' || c == '_' || c == ' ') continue;
-    out.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
-  }
-  return out;
-}
-
 }  // namespace
 
 const ModelTraits& traits(Model model) {
@@ -43,9 +34,9 @@ std::span<const ModelTraits> all_models() {
 }
 
 std::optional<Model> model_from_name(std::string_view name) {
-  const std::string wanted = normalised(name);
+  const std::string wanted = drivers::normalise_model_name(name);
   for (const auto& t : kModels) {
-    if (normalised(t.name) == wanted) return t.model;
+    if (drivers::normalise_model_name(t.name) == wanted) return t.model;
   }
   return std::nullopt;
 }

@@ -63,7 +63,7 @@ ImuVectors hdl32e_imu_in_lidar_frame(const PositionPacket& packet) {
   };
   ImuVectors out;
   out.gyro_rad_s = to_lidar(gyro_velodyne) * kDegToRad;
-  out.accel_m_s2 = to_lidar(accel_velodyne) * kHdlStandardGravity;
+  out.accel_m_s2 = to_lidar(accel_velodyne) * kStandardGravity;
   return out;
 }
 

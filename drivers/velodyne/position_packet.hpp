@@ -11,6 +11,7 @@
 #include <span>
 #include <string_view>
 
+#include "core/units.hpp"
 #include "drivers/velodyne/nmea.hpp"
 
 namespace livod::drivers::velodyne {
@@ -23,7 +24,6 @@ inline constexpr double kHdlGyroDegPerSecPerLsb = 0.09766;
 inline constexpr double kHdlTemperatureCPerLsb = 0.1453;
 inline constexpr double kHdlTemperatureOffsetC = 25.0;
 inline constexpr double kHdlAccelGPerLsb = 0.001221;
-inline constexpr double kHdlStandardGravity = 9.80665;  // m/s^2 per g in the SI conversion
 
 // One of the HDL-32E's three motion sensors, converted from 12-bit two's complement words with
 // the scale factors above.

@@ -1,14 +1,11 @@
 #include "drivers/velodyne/top_of_hour.hpp"
 
+#include "core/numeric.hpp"
+
 namespace livod::drivers::velodyne {
 namespace {
 
 constexpr std::int64_t kHalfHourNs = kHourNs / 2;
-
-std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  const std::int64_t q = a / b;
-  return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
-}
 
 }  // namespace
 

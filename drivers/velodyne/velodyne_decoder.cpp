@@ -1,14 +1,16 @@
 #include "drivers/velodyne/velodyne_decoder.hpp"
 
+#include "core/numeric.hpp"
+
+#include <algorithm>
 #include <cmath>
 
+#include "drivers/velodyne/velodyne_family.hpp"
 #include "drivers/velodyne/wire.hpp"
 
 namespace livod::drivers::velodyne {
 namespace {
 
-constexpr std::uint16_t kDataPort = 2368;  // VROS velodyne_driver input.h
-constexpr std::uint16_t kPositionPort = 8308;
 constexpr int kHalfTurn = 18000;  // 0.01 degree
 constexpr std::int64_t kHalfHourUs = 1'800'000'000;
 // Consecutive packets further apart than this are not used to estimate a rotation rate.
@@ -16,6 +18,8 @@ constexpr std::int64_t kMaxRateBaselineNs = 10'000'000;
 // Scans are reserved for 1/8 s of single-return points: a 10 Hz scan with margin, so that
 // steady state does not allocate; slower or dual-return sensors grow it once.
 constexpr double kReservedScanSeconds = 0.125;
+// Forgetting factor of the long-baseline rotation rate, per packet (about 30 packets' memory).
+constexpr double kRateMemory = 0.97;
 // Below half a turn per second the azimuth says nothing reliable about missing packets.
 constexpr double kMinGapRateCentidegPerNs = 0.5 * 36000.0 * 1e-9;
 
@@ -31,11 +35,6 @@ bool imu_words_present(const PositionPacket& p) {
   return false;
 }
 
-std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  const std::int64_t q = a / b;
-  return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
-}
-
 }  // namespace
 
 VelodyneDecoder::VelodyneDecoder(const VelodyneOptions& options, const Calibration& calibration)
@@ -48,7 +47,9 @@ VelodyneDecoder::VelodyneDecoder(const VelodyneOptions& options)
     : VelodyneDecoder(options, calibration_for(options)) {}
 
 std::vector<std::uint16_t> VelodyneDecoder::default_ports() const {
-  return {kDataPort, kPositionPort};
+  // The family table's vendor defaults (velodyne_family.cpp), the same for every model.
+  const UdpPorts& ports = velodyne_family().models.front().ports;
+  return {ports.lidar, ports.position};
 }
 
 std::string VelodyneDecoder::model_name() const {
@@ -100,20 +101,24 @@ void VelodyneDecoder::emit_scan(const DecoderSinks& sinks, bool complete) {
 
 void VelodyneDecoder::on_data_packet(const PacketView& packet, const DecoderSinks& sinks) {
   const auto payload = packet.payload;
-  // Rate fallback for packets that hold a single firing sequence: the azimuth advance since
-  // the previous packet over the timestamp difference.
+  // Rate fallback for packets that hold a single firing sequence: the azimuth advance from the
+  // previous packet's last block over the time between them.
   double fallback_rate = azimuth_rate_;
   const std::uint32_t toh_us = wire::u32le(payload, wire::kTimestampOffset);
   const std::uint16_t first_azimuth = wire::u16le(payload, 2);
   if (have_previous_packet_ && first_azimuth <= wire::kAzimuthUnitsPerTurn) {
-    const std::int64_t dt_ns = (static_cast<std::int64_t>(toh_us) - previous_packet_toh_us_) * 1000;
-    const int advance = (36000 + first_azimuth - previous_packet_azimuth_) % 36000;
-    if (dt_ns > 0 && dt_ns <= kMaxRateBaselineNs && advance < kHalfTurn) {
+    const std::int64_t dt_ns =
+        (static_cast<std::int64_t>(toh_us) - previous_packet_toh_us_) * 1000 -
+        previous_last_block_ns_;
+    const int advance = (36000 + first_azimuth - previous_last_azimuth_) % 36000 -
+                        skipped_centideg(previous_last_azimuth_, first_azimuth);
+    if (dt_ns > 0 && dt_ns <= kMaxRateBaselineNs && advance > 0 && advance < kHalfTurn) {
       fallback_rate = advance / static_cast<double>(dt_ns);
     }
   }
 
-  const DataPacketResult r = decoder_.decode(payload, fallback_rate, returns_);
+  const double dating_rate = rate_time_sum_ns_ > 0.0 ? rate_advance_sum_ / rate_time_sum_ns_ : 0.0;
+  const DataPacketResult r = decoder_.decode(payload, fallback_rate, returns_, dating_rate);
   if (r.status != DataDecodeStatus::kOk) {
     ++counters_.decode_errors;
     ++velodyne_.bad_content;
@@ -124,12 +129,27 @@ void VelodyneDecoder::on_data_packet(const PacketView& packet, const DecoderSink
   velodyne_.zero_ranges += r.zero_ranges;
   velodyne_.duplicate_returns += r.duplicates;
   velodyne_.out_of_range += r.out_of_range;
+  velodyne_.undated_blocks += r.undated_blocks;
   const double rate = r.azimuth_rate.value_or(fallback_rate);
+  if (r.azimuth_jumps > 0) {
+    ++velodyne_.fov_boundary_packets;
+    if (!options_.fov && rate > 0.0) {
+      // The window ends one firing sequence's rotation after the last block before the jump
+      // and starts at the first block after it.
+      const double step = rate * static_cast<double>(decoder_.timing().packet_period_ns(r.dual)) /
+                          static_cast<double>(r.blocks_used);
+      learned_fov_ = AzimuthWindow{r.jump_to_azimuth / 100.0,
+                                   std::fmod((r.jump_from_azimuth + step) / 100.0, 360.0)};
+    }
+  }
 
-  // Continuity with the previous packet. The timestamp tells late or repeated packets (which
-  // would cut a scan and put points out of time order: they are dropped) from losses; the
-  // azimuth counts the lost packets, one packet's worth of rotation each. Packets holding one
-  // firing sequence (no in-packet rate) or losses of half a turn or more are counted by time.
+  // Continuity with the previous packet, from its last block to this packet's first block. The
+  // timestamp tells late or repeated packets (which would cut a scan and put points out of time
+  // order: they are dropped) from losses; the azimuth counts the lost packets, one packet's worth
+  // of rotation each. The FOV's skipped sector is no loss (inside a boundary packet the decode
+  // already dated it). Packets holding one firing sequence (no in-packet rate) or losses of half
+  // a turn or more are counted by time.
+  const FiringTiming& timing = decoder_.timing();
   if (have_previous_packet_) {
     std::int64_t dt_us = static_cast<std::int64_t>(r.toh_us) - previous_packet_toh_us_;
     if (dt_us < -kHalfHourUs) dt_us += 2 * kHalfHourUs;  // the counter rolled over the hour
@@ -137,23 +157,40 @@ void VelodyneDecoder::on_data_packet(const PacketView& packet, const DecoderSink
       ++velodyne_.late_packets;
       return;
     }
-    const int advance = (36000 + r.block_azimuth[0] - previous_packet_azimuth_) % 36000;
-    const std::int64_t period_ns = decoder_.timing().packet_period_ns(r.dual);
+    const std::int64_t period_ns = timing.packet_period_ns(r.dual);
+    // Nominal time from a packet's last firing sequence to the next packet's first.
+    const std::int64_t step_ns = period_ns - (timing.block_reference_ns(r.dual, r.blocks_used - 1) -
+                                              timing.block_reference_ns(r.dual, 0));
+    const int skipped = skipped_centideg(previous_last_azimuth_, r.block_azimuth[0]);
+    const int advance = (36000 + r.block_azimuth[0] - previous_last_azimuth_) % 36000 - skipped;
     std::int64_t missing = 0;
     if (advance < kHalfTurn && r.azimuth_rate && *r.azimuth_rate > kMinGapRateCentidegPerNs) {
-      const double expected = *r.azimuth_rate * static_cast<double>(period_ns);
-      missing = std::llround(advance / expected) - 1;
-    } else {
+      const double expected = *r.azimuth_rate * static_cast<double>(step_ns);
       missing =
-          std::llround(static_cast<double>(dt_us * 1000) / static_cast<double>(period_ns)) - 1;
+          std::llround((advance - expected) / (*r.azimuth_rate * static_cast<double>(period_ns)));
+    } else {
+      double gap_ns = static_cast<double>(dt_us * 1000 + timing.block_reference_ns(r.dual, 0) -
+                                          previous_last_block_ns_ - step_ns);
+      if (skipped > 0 && rate > kMinGapRateCentidegPerNs) gap_ns -= skipped / rate;
+      missing = std::llround(gap_ns / static_cast<double>(period_ns));
     }
     if (missing > 0) {
       counters_.sequence_gaps += static_cast<std::uint64_t>(missing);
       scan_has_gap_ = true;
     }
   }
+  if (r.azimuth_jumps == 0 && r.azimuth_rate) {
+    const int last = r.blocks_used - 1;
+    const std::int32_t span_ns =
+        timing.block_reference_ns(r.dual, last) - timing.block_reference_ns(r.dual, 0);
+    const int advance_in_packet =
+        (36000 + r.block_azimuth[static_cast<std::size_t>(last)] - r.block_azimuth[0]) % 36000;
+    rate_advance_sum_ = kRateMemory * rate_advance_sum_ + advance_in_packet;
+    rate_time_sum_ns_ = kRateMemory * rate_time_sum_ns_ + span_ns;
+  }
   have_previous_packet_ = true;
-  previous_packet_azimuth_ = r.block_azimuth[0];
+  previous_last_azimuth_ = r.last_block_azimuth;
+  previous_last_block_ns_ = r.last_block_time_ns;
   previous_packet_toh_us_ = r.toh_us;
   azimuth_rate_ = rate;
 
@@ -162,8 +199,10 @@ void VelodyneDecoder::on_data_packet(const PacketView& packet, const DecoderSink
   velodyne_.hour_rollovers += clock_.hour_rollovers() - rollovers_before;
 
   for (int b = 0; b < r.blocks_used; ++b) {
+    const std::int32_t delay = r.block_delay_ns[static_cast<std::size_t>(b)];
+    if (delay == kUndatableDelay) continue;
     const std::uint16_t azimuth = r.block_azimuth[static_cast<std::size_t>(b)];
-    const std::int64_t block_ns = packet_ns + decoder_.timing().block_reference_ns(r.dual, b);
+    const std::int64_t block_ns = packet_ns + timing.block_reference_ns(r.dual, b) + delay;
     if (should_cut(azimuth, block_ns)) {
       emit_scan(sinks, true);
       scan_started_at_cut_ = true;

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/measurement.hpp"
+#include "drivers/azimuth_window.hpp"
 #include "drivers/lidar_decoder.hpp"
 #include "drivers/velodyne/calibration.hpp"
 #include "drivers/velodyne/data_packet.hpp"
@@ -37,6 +38,10 @@ enum class ScanCut : std::uint8_t {
 
 struct VelodyneOptions {
   Model model = Model::kVlp16;
+  // The sensor's FOV setting (web interface "FOV start/end"). Without it the decoder learns the
+  // window from the packets that straddle its edge (an azimuth jump inside a packet), and tells
+  // the skipped sector from lost packets from then on; configured, it does so from the start.
+  std::optional<AzimuthWindow> fov;
   std::optional<std::filesystem::path> calibration_file;  // default: the model's nominal table
   DecodeSettings decode;
   ScanCut cut = ScanCut::kAzimuthDecrease;
@@ -57,6 +62,8 @@ struct VelodyneCounters {
   std::uint64_t time_rebases = 0;             // hour re-anchors from GPS
   std::uint64_t bad_length = 0;               // payloads neither 1206 nor 512 bytes
   std::uint64_t bad_content = 0;              // 1206/512-byte payloads with invalid fields
+  std::uint64_t fov_boundary_packets = 0;     // packets with an azimuth jump (reduced FOV)
+  std::uint64_t undated_blocks = 0;  // blocks after a jump that no rotation rate could date
 };
 
 class VelodyneDecoder final : public LidarDecoder {
@@ -100,10 +107,22 @@ class VelodyneDecoder final : public LidarDecoder {
   std::uint16_t previous_block_azimuth_ = 0;
   std::int64_t previous_block_time_ns_ = 0;
 
+  // The configured FOV window, or else the one learned from the last boundary packet.
+  [[nodiscard]] int skipped_centideg(std::uint16_t from, std::uint16_t to) const {
+    if (options_.fov) return options_.fov->skipped_on_path_centideg(from, to);
+    return learned_fov_ ? learned_fov_->skipped_on_path_centideg(from, to) : 0;
+  }
+
   bool have_previous_packet_ = false;
-  std::uint16_t previous_packet_azimuth_ = 0;
+  std::uint16_t previous_last_azimuth_ = 0;  // last block of the previous packet
+  std::int32_t previous_last_block_ns_ = 0;  // its time from the previous packet's stamp
   std::uint32_t previous_packet_toh_us_ = 0;
   double azimuth_rate_ = 0.0;  // 0.01 degree per ns, last measured
+  // Long-baseline rotation rate: azimuth advance and time summed over the recent jump-free
+  // packets with exponential forgetting; dates the blocks after a FOV jump.
+  std::optional<AzimuthWindow> learned_fov_;
+  double rate_advance_sum_ = 0.0;
+  double rate_time_sum_ns_ = 0.0;
 
   std::optional<PpsStatus> last_pps_;
   std::optional<RmcFix> last_fix_;

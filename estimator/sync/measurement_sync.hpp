@@ -1,13 +1,26 @@
 #pragma once
 // Measurement groups (fast-livo2-notes.md 1.1, sync_packages): what the filter consumes in one
-// step - an update time, the IMU samples up to it and the LiDAR points measured since the last
-// update.
+// step - an update time, the IMU samples up to it, the LiDAR points measured since the last
+// update and, at image times, the image.
 //
-// Here groups are at LiDAR rate: the update time is the scan end and the points are the scan
-// (FAST-LIVO2's ONLY_LIO grouping). The VIO half adds image-time groups from the same queues
-// (scan recombination: points split at the image time, a LIO then a VIO update at that time) as a
-// new Kind; LIO groups never wait for an image, so odometry goes on when a camera stops
-// (FAST-LIVO2 defect 1).
+// Two kinds of group:
+//  - lidar: the update time is a scan's end (its latest point) and the points are those of the
+//    scan not used yet (FAST-LIO2 / FAST-LIVO2 ONLY_LIO grouping). The rest of a scan cut at an
+//    image time never makes a group of its own: it joins the next scan (a LIO update always sees
+//    at least a whole scan's worth of points);
+//  - image: the update time is an image's mid-exposure time and the points are those measured
+//    since the last update up to that time (scan recombination: scans are cut at image times,
+//    the rest of a cut scan waits for the next group). The pipeline runs the LIO update and
+//    then the VIO update at that one instant.
+//
+// With images enabled (enable_images), image groups are made whenever the points up to the image
+// time have arrived; a scan end becomes a lidar group only when no image is due for it. An image
+// is due when it comes within image_timeout of the scan end and before the next scan would end
+// (one scan period, the scan's own span, later): then its group takes the scan's points. With no
+// image queued, the scan end waits until the data (the IMU) reaches that horizon. LIO therefore
+// never waits more than min(image_timeout, a scan period) of data time for a camera: when images
+// stop, odometry goes on at LiDAR rate, and it returns to image times when they come back
+// (FAST-LIVO2 stops: defect 1).
 //
 // Inputs carry mapped times: every per-sensor offset has been applied once, by the sensor's clock
 // domain, before anything reaches this class. Out-of-order input is dropped and counted; queues
@@ -18,6 +31,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/image.hpp"
 #include "core/measurement.hpp"
 
 namespace livod::estimator {
@@ -25,17 +39,22 @@ namespace livod::estimator {
 struct SyncParams {
   std::size_t max_queued_scans = 20;  // 2 s at 10 Hz
   std::size_t max_queued_imu = 4000;  // 2 s at 2 kHz, 10 s at 400 Hz
+  std::size_t max_queued_images = 8;  // 0.8 s at 10 Hz (each holds its pixels)
+  double image_timeout_s = 0.15;      // see the header comment
 };
 
 struct MeasurementGroup {
-  enum class Kind { lidar };
+  enum class Kind { lidar, image };
   Kind kind = Kind::lidar;
-  MappedTime t_update;  // the scan end
+  MappedTime t_update;  // lidar: the scan end; image: the image's mid-exposure time
+  // The points measured in (previous update, t_update]; times relative to scan.start as usual.
+  // May be empty in an image group (no LiDAR point since the last update).
   LidarScan scan;
   // Samples stamped in (previous update, t_update], in time order.
   std::vector<ImuSample> imu;
   // The first sample after t_update, when it has arrived (interpolates the last interval).
   std::optional<ImuSample> imu_after;
+  ImageFrame image;  // image groups
 };
 
 struct SyncCounters {
@@ -45,7 +64,12 @@ struct SyncCounters {
   std::uint64_t imu_in = 0;
   std::uint64_t imu_out_of_order = 0;  // stamp at or before the previous sample's
   std::uint64_t imu_queue_overflow = 0;
+  std::uint64_t images_in = 0;
+  std::uint64_t images_out_of_order = 0;  // at or before the previous image
+  std::uint64_t images_late = 0;          // arrived after the estimator passed their time
+  std::uint64_t images_queue_overflow = 0;
   std::uint64_t groups = 0;
+  std::uint64_t image_groups = 0;
 };
 
 class MeasurementSync {
@@ -55,19 +79,24 @@ class MeasurementSync {
   // The timeline starts at t (the IMU initialisation's last sample): earlier input is out of order.
   void start(MappedTime t);
   [[nodiscard]] bool started() const { return started_; }
+  // Image groups from now on (the pipeline has a camera and VIO on); without it images are not
+  // accepted and every group is a lidar group.
+  void enable_images(bool on) { images_enabled_ = on; }
 
   void add_imu(const ImuSample& sample);
   // Empty scans are ignored. The scan end is its latest point time. Taken by value: a caller that
   // no longer needs its copy moves it into the queue.
   void add_scan(LidarScan scan);
+  // Queued by mid_exposure. The group shares the pixel buffer (cv::Mat reference counting).
+  void add_image(ImageFrame image);
 
-  // Moves the next complete group into `group` (IMU data reaches its update time); false when no
-  // group is complete yet.
+  // Moves the next complete group into `group`; false when no group is complete yet.
   bool next(MeasurementGroup& group);
 
   [[nodiscard]] const SyncCounters& counters() const { return counters_; }
   [[nodiscard]] std::size_t queued_scans() const { return scans_.size(); }
   [[nodiscard]] std::size_t queued_imu() const { return imu_.size(); }
+  [[nodiscard]] std::size_t queued_images() const { return images_.size(); }
 
   // The time of a scan's last point.
   [[nodiscard]] static MappedTime scan_end(const LidarScan& scan);
@@ -75,15 +104,26 @@ class MeasurementSync {
  private:
   struct QueuedScan {
     LidarScan scan;
-    MappedTime end;
+    MappedTime begin;  // earliest point
+    MappedTime end;    // latest point
+    bool cut = false;  // the rest of a scan cut at an image time
   };
+
+  // A lidar group ending at the end of scans_[index] (index 1: the front is the rest of a cut).
+  bool next_lidar(MeasurementGroup& group, std::size_t index);
+  // Fills group.scan with every queued point up to t (cutting the scan that straddles t).
+  void take_points_until(MappedTime t, LidarScan& out);
+  void take_imu_until(MappedTime t, MeasurementGroup& group);
 
   SyncParams params_;
   bool started_ = false;
+  bool images_enabled_ = false;
   MappedTime last_update_;  // the last group's update time (or the start)
   MappedTime last_imu_;     // the newest accepted sample (or the start)
+  MappedTime last_image_;   // the newest accepted image
   std::deque<ImuSample> imu_;
   std::deque<QueuedScan> scans_;
+  std::deque<ImageFrame> images_;
   SyncCounters counters_;
 };
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 namespace livod::estimator {
 namespace {
 
@@ -140,6 +142,195 @@ TEST(MeasurementSync, NothingBeforeStart) {
   sync.start(MappedTime(0));  // start clears what came before it
   EXPECT_EQ(sync.queued_scans(), 0U);
   EXPECT_EQ(sync.queued_imu(), 0U);
+}
+
+// --- image groups (scan recombination, LIO never waiting long for a camera) ---
+
+// A 10 Hz scan [start, start + 99 ms] with a point every millisecond; x tags the point's time.
+LidarScan dense_scan(std::int64_t start_ns, std::uint32_t sequence) {
+  LidarScan s;
+  s.start.mapped = MappedTime(start_ns);
+  s.sequence = sequence;
+  for (int k = 0; k < 100; ++k) {
+    const std::int64_t t = start_ns + k * kMs;
+    s.push_back(static_cast<float>(static_cast<double>(t) * 1e-9), 0, 0, 0,
+                static_cast<std::uint16_t>(k % 4), 0, static_cast<std::int32_t>(k * kMs));
+  }
+  return s;
+}
+
+ImageFrame image_at(std::int64_t t_ns) {
+  ImageFrame f;
+  f.stamp.mapped = MappedTime(t_ns);
+  f.mid_exposure = MappedTime(t_ns);
+  f.image = cv::Mat(4, 4, CV_8UC1, cv::Scalar(static_cast<double>(t_ns / kMs % 256)));
+  return f;
+}
+
+// Feeds `until_ms` of a rig: 200 Hz IMU, 10 Hz scans delivered at their end, and images whose
+// mid-exposure times `image_ms` says, delivered `latency_ms` later (a camera's latency); groups are
+// taken every `poll_ms`. Returns the groups in order.
+std::vector<MeasurementGroup> run_rig(MeasurementSync& sync, std::int64_t until_ms,
+                                      const std::vector<std::int64_t>& image_ms,
+                                      std::int64_t latency_ms = 20, std::int64_t poll_ms = 1) {
+  std::vector<MeasurementGroup> groups;
+  MeasurementGroup g;
+  std::uint32_t seq = 0;
+  std::size_t next_image = 0;
+  for (std::int64_t t = 1; t <= until_ms; ++t) {
+    if (t % 5 == 0) sync.add_imu(imu_at(t * kMs));
+    if (t % 100 == 0) sync.add_scan(dense_scan((t - 100) * kMs, seq++));
+    while (next_image < image_ms.size() && image_ms[next_image] + latency_ms <= t) {
+      sync.add_image(image_at(image_ms[next_image++] * kMs));
+    }
+    if (t % poll_ms == 0) {
+      while (sync.next(g)) groups.push_back(g);
+    }
+  }
+  return groups;
+}
+
+// Every point exactly once, in the group whose (previous update, update] holds its time.
+void expect_points_partitioned(const std::vector<MeasurementGroup>& groups,
+                               std::int64_t last_point_ns) {
+  std::int64_t previous = 0;
+  std::int64_t expected_next = 0;  // points come every ms from 0
+  for (const auto& g : groups) {
+    std::vector<std::int64_t> times;
+    for (std::size_t i = 0; i < g.scan.size(); ++i) times.push_back(g.scan.point_time(i).ns);
+    std::sort(times.begin(), times.end());
+    for (const auto t : times) {
+      EXPECT_GT(t, previous - (previous == 0 ? 1 : 0)) << "point before the previous update";
+      EXPECT_LE(t, g.t_update.ns) << "point after its group's update time";
+      EXPECT_EQ(t, expected_next) << "a point lost or duplicated";
+      // x tags the time the point was measured at: re-referencing kept it.
+      expected_next = t + kMs;
+    }
+    for (std::size_t i = 0; i < g.scan.size(); ++i) {
+      EXPECT_NEAR(g.scan.x[i], static_cast<double>(g.scan.point_time(i).ns) * 1e-9, 1e-6);
+    }
+    previous = g.t_update.ns;
+  }
+  EXPECT_EQ(expected_next, last_point_ns + kMs);
+}
+
+TEST(MeasurementSync, ImageGroupsCutScansAtImageTimes) {
+  MeasurementSync sync;
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  // A 10 Hz camera in the middle of the scans.
+  std::vector<std::int64_t> images;
+  for (std::int64_t t = 50; t < 1000; t += 100) images.push_back(t);
+  const auto groups = run_rig(sync, 1100, images);
+  // One group per image up to 950 ms (the scan ending at 999 ms has arrived at 1000 ms);
+  // nothing at the scan ends (an image is always due within the timeout).
+  ASSERT_EQ(groups.size(), images.size());
+  for (std::size_t k = 0; k < groups.size(); ++k) {
+    EXPECT_EQ(groups[k].kind, MeasurementGroup::Kind::image);
+    EXPECT_EQ(groups[k].t_update.ns, images[k] * kMs);
+    EXPECT_EQ(groups[k].image.mid_exposure.ns, images[k] * kMs);
+    ASSERT_FALSE(groups[k].imu.empty());
+    EXPECT_LE(groups[k].imu.back().stamp.mapped.ns, images[k] * kMs);
+    ASSERT_TRUE(groups[k].imu_after);
+    EXPECT_GT(groups[k].imu_after->stamp.mapped.ns, images[k] * kMs);
+  }
+  // The first group holds the points up to the first image, later ones 100 ms each, taken from
+  // two scans (scan recombination).
+  EXPECT_EQ(groups[0].scan.size(), 51U);
+  EXPECT_EQ(groups[1].scan.size(), 100U);
+  expect_points_partitioned(groups, 950 * kMs);
+  EXPECT_EQ(sync.counters().image_groups, images.size());
+}
+
+TEST(MeasurementSync, LidarGoesOnWhenImagesStopAndImagesResume) {
+  MeasurementSync sync(SyncParams{.image_timeout_s = 0.15});
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  // Images until 350 ms, none until 1550 ms, then again.
+  std::vector<std::int64_t> images = {50, 150, 250, 350};
+  for (std::int64_t t = 1550; t < 2000; t += 100) images.push_back(t);
+  const auto groups = run_rig(sync, 2200, images);
+  std::vector<std::int64_t> lidar_ends;
+  std::vector<std::int64_t> image_times;
+  for (const auto& g : groups) {
+    (g.kind == MeasurementGroup::Kind::lidar ? lidar_ends : image_times)
+        .push_back(g.t_update.ns / kMs);
+  }
+  // During the gap every scan end is an update (LiDAR rate): 499 (with the rest of the scan cut
+  // at 350 ms), 599, ... 1399; 1499 waits for the 1550 ms image, due before the next scan ends,
+  // which takes its points. After the last image (1950 ms) the rest of its scan joins the next
+  // one: 2099, once the IMU is a scan period past it without an image.
+  EXPECT_EQ(lidar_ends, (std::vector<std::int64_t>{499, 599, 699, 799, 899, 999, 1099, 1199, 1299,
+                                                   1399, 2099}));
+  EXPECT_EQ(image_times,
+            (std::vector<std::int64_t>{50, 150, 250, 350, 1550, 1650, 1750, 1850, 1950}));
+  expect_points_partitioned(groups, 2099 * kMs);
+  EXPECT_EQ(groups[4].scan.size(), 149U);  // 351 .. 499 ms
+}
+
+TEST(MeasurementSync, AScanEndIsNotSwallowedByALaterImageArrivingWithTheNextScan) {
+  // Groups taken every 100 ms. When the camera returns, its first image (1599) comes with the scan
+  // after the one ending at 1499: that image is more than a scan period after 1499, so 1499 keeps
+  // its own LIO update even though the image is already queued when its turn comes (taking the
+  // image first would merge the two scans).
+  MeasurementSync sync(SyncParams{.image_timeout_s = 0.15});
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  const auto groups = run_rig(sync, 2000, {50, 150, 1599, 1699}, 1, 100);
+  std::vector<std::int64_t> times;
+  for (const auto& g : groups) times.push_back(g.t_update.ns / kMs);
+  EXPECT_EQ(times, (std::vector<std::int64_t>{50, 150, 299, 399, 499, 599, 699, 799, 899, 999, 1099,
+                                              1199, 1299, 1399, 1499, 1599, 1699, 1799, 1899}));
+  expect_points_partitioned(groups, 1899 * kMs);
+}
+
+TEST(MeasurementSync, ImagesUpToAScanPeriodLateAreUsed) {
+  // A camera delivering 80 ms after mid-exposure: every image still gets its group.
+  MeasurementSync sync;
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  std::vector<std::int64_t> images;
+  for (std::int64_t t = 50; t < 1000; t += 100) images.push_back(t);
+  const auto groups = run_rig(sync, 1200, images, 80);
+  std::vector<std::int64_t> image_times;
+  for (const auto& g : groups) {
+    if (g.kind == MeasurementGroup::Kind::image) image_times.push_back(g.t_update.ns / kMs);
+  }
+  EXPECT_EQ(image_times, images);
+  EXPECT_EQ(sync.counters().images_late, 0U);
+  expect_points_partitioned(groups, groups.back().t_update.ns);
+}
+
+TEST(MeasurementSync, ASlowCameraLeavesScanEndsToLio) {
+  MeasurementSync sync(SyncParams{.image_timeout_s = 0.15});
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  // 2.5 Hz: an image every 400 ms.
+  const auto groups = run_rig(sync, 1700, {150, 550, 950, 1350});
+  std::vector<std::int64_t> times;
+  for (const auto& g : groups) times.push_back(g.t_update.ns / kMs);
+  // Scan ends more than the timeout before the next image are LIO updates at LiDAR rate; the
+  // rest of a cut scan joins the next one.
+  EXPECT_EQ(times, (std::vector<std::int64_t>{150, 299, 399, 550, 699, 799, 950, 1099, 1199, 1350,
+                                              1499, 1599}));
+  expect_points_partitioned(groups, 1599 * kMs);
+}
+
+TEST(MeasurementSync, LateAndDisabledImages) {
+  MeasurementSync off;
+  off.start(MappedTime(0));
+  off.add_image(image_at(50 * kMs));
+  EXPECT_EQ(off.queued_images(), 0U);  // images not enabled: not queued, not counted
+
+  MeasurementSync sync;
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  const auto groups = run_rig(sync, 1000, {50, 150});
+  ASSERT_FALSE(groups.empty());
+  // An image older than the last update can no longer be used.
+  sync.add_image(image_at(100 * kMs));
+  EXPECT_EQ(sync.counters().images_out_of_order + sync.counters().images_late, 1U);
+  EXPECT_EQ(sync.queued_images(), 0U);
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "io/udp_socket.hpp"
 #include "tests/replay/sim_replay.hpp"
 #include "tests/runtime/fake_livox.hpp"
+#include "tests/runtime/pose_comparison.hpp"
 #include "tests/runtime/udp_replayer.hpp"
 #include "tools/eval/trajectory_io.hpp"
 
@@ -105,47 +106,9 @@ void run_live(const daemon::LivodConfig& config, const std::filesystem::path& pc
   if (sender.joinable()) sender.join();
 }
 
-struct Comparison {
-  std::size_t matched = 0;
-  double max_position_m = 0.0;
-  double max_rotation_deg = 0.0;
-};
-
-// Live poses against the replay's: both timelines are the sensor's clock plus a constant; the
-// constant is the one that pairs most poses within 1 ms.
-Comparison compare(const std::vector<PoseRecord>& live, const eval::Trajectory& replayed) {
-  Comparison best;
-  if (live.empty() || replayed.stamps_s.empty()) return best;
-  std::vector<std::int64_t> rep_ns;
-  for (const double t : replayed.stamps_s) rep_ns.push_back(std::llround(t * 1e9));
-  for (std::size_t j = 0; j < std::min<std::size_t>(8, rep_ns.size()); ++j) {
-    const std::int64_t shift = live.front().t.ns - rep_ns[j];
-    Comparison c;
-    for (const auto& p : live) {
-      if (p.status == PoseStatus::kSensorStale) continue;  // a repeat, not a new pose
-      const std::int64_t t = p.t.ns - shift;
-      const auto it = std::lower_bound(rep_ns.begin(), rep_ns.end(), t - 1'000'000);
-      if (it == rep_ns.end() || std::llabs(*it - t) > 1'000'000) continue;
-      const auto k = static_cast<std::size_t>(it - rep_ns.begin());
-      ++c.matched;
-      const double dp = (p.p_world_body - replayed.poses[k].translation).norm();
-      if (std::getenv("LIVOD_TEST_VERBOSE") != nullptr) {
-        std::printf("pose %zu t %.3f dp %.3f mm\n", k, (t - rep_ns.front()) * 1e-9, dp * 1e3);
-      }
-      c.max_position_m = std::max(c.max_position_m, dp);
-      const Eigen::Matrix3d dR = replayed.poses[k].rotation.transpose() * p.R_world_body;
-      c.max_rotation_deg = std::max(c.max_rotation_deg, so3::log(dR).norm() * 180.0 / M_PI);
-    }
-    if (c.matched > best.matched) best = c;
-  }
-  return best;
-}
-
-std::size_t real_poses(const std::vector<PoseRecord>& poses) {
-  return static_cast<std::size_t>(std::count_if(poses.begin(), poses.end(), [](const auto& p) {
-    return p.status != PoseStatus::kSensorStale;
-  }));
-}
+using test::compare_with_replay;
+using test::PoseComparison;
+using test::real_poses;
 
 void live_matches_replay(const std::string& scenario_name, double duration_s) {
   const sim::Scenario scenario = sim::make_scenario(scenario_name);
@@ -161,7 +124,7 @@ void live_matches_replay(const std::string& scenario_name, double duration_s) {
   // One pose per scan, the same poses as the replay.
   const std::size_t n = real_poses(live.bus.poses);
   EXPECT_EQ(n, replayed.summary.frames);
-  const Comparison c = compare(live.bus.poses, trajectory);
+  const PoseComparison c = compare_with_replay(live.bus.poses, trajectory);
   EXPECT_GE(c.matched, replayed.summary.frames - 1) << "poses paired with the replay's";
   EXPECT_LE(c.max_position_m, 1e-3);
   EXPECT_LE(c.max_rotation_deg, 0.05);
@@ -268,7 +231,7 @@ TEST(DaemonLive, MalformedDatagramsAreCountedAndSkipped) {
   // Short junk fails decoding; junk longer than the port's packets is cut by the slot and skipped.
   EXPECT_EQ(sensor.decode_errors + sensor.truncated, live.sent.malformed);
   EXPECT_GT(live.sent.malformed, live.sent.sent / 12);
-  const Comparison c = compare(live.bus.poses, trajectory);
+  const PoseComparison c = compare_with_replay(live.bus.poses, trajectory);
   EXPECT_GE(c.matched, replayed.summary.frames - 1);
   EXPECT_LE(c.max_position_m, 1e-3);
   EXPECT_LE(c.max_rotation_deg, 0.05);

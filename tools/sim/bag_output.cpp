@@ -11,9 +11,11 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "drivers/imu/bosch_mm7.hpp"
+#include "drivers/imu/candump_frames.hpp"
 #include "drivers/imu/sbg_can.hpp"
+#include "drivers/lidar_family.hpp"
 #include "drivers/livox/livox_decoder.hpp"
-#include "drivers/registry.hpp"
 #include "io/candump.hpp"
 #include "io/euroc.hpp"
 #include "io/euroc_image.hpp"
@@ -104,12 +106,22 @@ struct Topic {
   std::uint64_t* count = nullptr;  // messages written, in the report
 };
 
+std::string_view driver_of(const std::string& model) {
+  const auto match = drivers::find_model(model);
+  return match ? match->family->driver : std::string_view();
+}
+
 bool is_livox(const std::string& model) {
-  return livox::livox_model(model).has_value();
+  const std::string_view driver = driver_of(model);
+  return driver == "livox_sdk1" || driver == "livox_sdk2";
 }
 
 bool is_ouster(const std::string& model) {
-  return model.rfind("OS", 0) == 0;
+  return driver_of(model) == "ouster";
+}
+
+bool is_hesai(const std::string& model) {
+  return driver_of(model) == "hesai";
 }
 
 class LidarSource final : public QueuedSource {
@@ -119,7 +131,7 @@ class LidarSource final : public QueuedSource {
       : source_(source),
         clock_(source.clock, host_epoch_ns, lidar_stamp_wrap_ns(source.model)),
         reader_(source.capture),
-        decoder_(make_capture_decoder(source.model, source.metadata)),
+        decoder_(make_capture_decoder(source.model, source.decoder_file)),
         points_(points),
         imu_(imu),
         livox_(is_livox(source.model)),
@@ -185,31 +197,35 @@ class CanImuSource final : public QueuedSource {
       : name_(source.name),
         clock_(source.clock, host_epoch_ns, kSbgCounterWrapNs),
         reader_(source.log),
-        topic_(topic) {}
+        topic_(topic) {
+    if (source.format == CanImuFormat::kSbg) {
+      decoder_ = std::make_unique<imu::SbgCanDecoder>();
+    } else {
+      decoder_ = std::make_unique<imu::BoschMm7Decoder>();
+    }
+  }
 
  private:
   bool refill() override {
     if (!reader_.next(frame_)) return false;
-    if (frame_.fd || frame_.rtr || frame_.error) return true;
-    imu::CanPayload payload;
-    payload.id = frame_.id;
-    payload.len = frame_.len;
-    std::copy_n(frame_.data.begin(), payload.data.size(), payload.data.begin());
-    payload.rx_time_ns = frame_.time_ns;
-    if (const auto sample = decoder_.on_frame(payload)) {
-      const std::int64_t stamp =
-          clock_.host_ns(sample->imu.stamp.sensor.ns, sample->imu.stamp.host.ns);
-      enqueue(frame_.time_ns, topic_.connection, to_imu_msg(sample->imu, stamp, name_, seq_));
+    if (frame_.rtr || frame_.error) return true;
+    decoder_->on_frame(imu::to_can_record(frame_), [this](const ImuSample& sample) {
+      // A device clock maps back exactly (SBG); without one (MM7) the stamp is the receive time
+      // of the sample's first frame, as a ROS driver stamps it.
+      const std::int64_t stamp = decoder_->has_sensor_clock()
+                                     ? clock_.host_ns(sample.stamp.sensor.ns, sample.stamp.host.ns)
+                                     : sample.stamp.host.ns;
+      enqueue(frame_.time_ns, topic_.connection, to_imu_msg(sample, stamp, name_, seq_));
       ++seq_;
       ++*topic_.count;
-    }
+    });
     return true;
   }
 
   std::string name_;
   SensorClockInverse clock_;
   io::CandumpReader reader_;
-  imu::SbgCanDecoder decoder_;
+  std::unique_ptr<imu::CanImuDecoder> decoder_;
   io::CanFrame frame_;
   Topic topic_;
   std::uint32_t seq_ = 0;
@@ -281,15 +297,23 @@ ros::sensor_msgs::Image load_image_message(const io::EurocImageRecord& record,
 }
 
 std::unique_ptr<drivers::LidarDecoder> make_capture_decoder(
-    const std::string& model, const std::optional<std::filesystem::path>& metadata) {
-  if (const auto livox = livox::livox_model(model)) {
-    return std::make_unique<livox::LivoxDecoder>(*livox, livox::LivoxDecoderOptions{});
+    const std::string& model, const std::optional<std::filesystem::path>& decoder_file) {
+  const auto match = drivers::find_model(model);
+  if (!match) throw Error("no LiDAR family has the model '" + model + "'");
+  drivers::LidarDecoderConfig config;
+  config.model = model;
+  switch (match->family->file) {
+    case drivers::DecoderFile::kMetadata:
+      config.metadata = decoder_file;
+      break;
+    case drivers::DecoderFile::kCalibrationOptional:
+    case drivers::DecoderFile::kCalibrationRequired:
+      config.calibration = decoder_file;
+      break;
+    case drivers::DecoderFile::kNone:
+      break;
   }
-  drivers::DecoderConfig config;
-  // The registry has one "OS" entry for every Ouster model: the metadata tells the rest.
-  config.model = is_ouster(model) ? "OS" : model;
-  if (is_ouster(model)) config.metadata = metadata;
-  return drivers::make_decoder(config);
+  return match->family->make_decoder(config);
 }
 
 double SensorClockInverse::scenario_time(std::int64_t sensor_ns, std::int64_t rx_ns) const {
@@ -338,8 +362,8 @@ double SensorClockInverse::scenario_time(std::int64_t sensor_ns, std::int64_t rx
 
 std::int64_t lidar_stamp_wrap_ns(const std::string& model) {
   // Velodyne packets carry microseconds past the hour; the others a full sensor time.
-  constexpr std::int64_t kHourNs = std::int64_t{3600} * 1'000'000'000;
-  return !is_livox(model) && !is_ouster(model) ? kHourNs : 0;
+  const auto match = drivers::find_model(model);
+  return match ? match->family->sensor_time_wrap_ns : 0;
 }
 
 std::int64_t SensorClockInverse::host_ns(std::int64_t sensor_ns, std::int64_t rx_ns) const {
@@ -462,6 +486,10 @@ SequenceBagReport write_sequence_bag(const std::filesystem::path& bag_path,
       if (lidar.imu) {
         imu = add(names.take("/os_cloud_node/imu", lidar.name, "imu"), ros::sensor_msgs::Imu{});
       }
+    } else if (is_hesai(lidar.model)) {
+      // The Hesai ROS drivers' topic; livod's PointCloud2 layout as for the Velodynes.
+      points =
+          add(names.take("/hesai/pandar", lidar.name, "points"), ros::sensor_msgs::PointCloud2{});
     } else {
       points = add(names.take("/velodyne_points", lidar.name, "points"),
                    ros::sensor_msgs::PointCloud2{});

@@ -35,6 +35,7 @@
 #include "io/euroc.hpp"
 #include "io/rosbag/bag_writer.hpp"
 #include "io/rosbag/ros_messages.hpp"
+#include "tools/sim/scenario.hpp"
 #include "tools/sim/sensor_clock.hpp"
 
 namespace livod::sim {
@@ -99,25 +100,27 @@ io::rosbag::sensor_msgs::Imu to_imu_msg(const ImuSample& sample, std::int64_t st
 io::rosbag::sensor_msgs::Image load_image_message(const io::EurocImageRecord& record,
                                                   const std::string& frame_id, std::uint32_t seq);
 
-// livod's decoder for a simulated model's capture (Livox models directly, the others through the
-// drivers registry; Ouster needs the metadata JSON the simulator wrote beside the capture).
+// livod's decoder for a simulated model's capture, from the model's family
+// (drivers/lidar_family.hpp); `decoder_file` is the file the simulator wrote beside the capture
+// for it (Ouster metadata JSON, Hesai angle correction CSV), passed as the family takes it.
 std::unique_ptr<drivers::LidarDecoder> make_capture_decoder(
-    const std::string& model, const std::optional<std::filesystem::path>& metadata);
+    const std::string& model, const std::optional<std::filesystem::path>& decoder_file);
 
 // What the bag is made of: the files of one runner output folder.
 struct BagLidarSource {
   std::string name;   // sensor name (frame_id, topic prefix when the default topic is taken)
   std::string model;  // simulated model (AVIA, MID-360, OS1-64, VLP-16, ...)
-  std::filesystem::path capture;                  // <name>.pcap
-  std::optional<std::filesystem::path> metadata;  // Ouster metadata JSON
+  std::filesystem::path capture;                      // <name>.pcap
+  std::optional<std::filesystem::path> decoder_file;  // Ouster metadata, Hesai angle CSV
   ClockFaults clock;
   bool imu = true;  // write the internal IMU (when the model has one)
 };
 
 struct BagCanImuSource {
   std::string name;
-  std::filesystem::path log;  // candump log, SBG layout
-  ClockFaults clock;          // of the device's microsecond counter
+  std::filesystem::path log;  // candump log
+  ClockFaults clock;          // of the device's microsecond counter (SBG)
+  CanImuFormat format = CanImuFormat::kSbg;
 };
 
 struct BagCameraSource {

@@ -19,8 +19,12 @@ CameraSim::CameraSim(const CameraSimParams& params) : params_(params), model_(pa
 }
 
 double CameraSim::exposure_at(double t) const {
-  return params_.exposure_s *
-         (1.0 + params_.exposure_variation * std::sin(2.0 * M_PI * t / params_.exposure_period_s));
+  double e = params_.exposure_s * (1.0 + params_.exposure_variation *
+                                             std::sin(2.0 * M_PI * t / params_.exposure_period_s));
+  for (const auto& step : params_.exposure_steps) {
+    if (t >= step.t_s) e *= step.factor;
+  }
+  return e;
 }
 
 double CameraSim::ideal_intensity(const World& world, const Eigen::Isometry3d& T_world_cam,

@@ -15,6 +15,18 @@
 
 namespace livod::sim {
 
+// An auto-exposure-like step: from t_s on, the exposure is multiplied by `factor`.
+struct ExposureStep {
+  double t_s = 0.0;
+  double factor = 1.0;
+};
+
+// A span of scenario time without frames (a camera that stops and comes back).
+struct CameraOutage {
+  double begin_s = 0.0;
+  double end_s = 0.0;
+};
+
 struct CameraSimParams {
   CameraIntrinsics intrinsics;
   double rate_hz = 10.0;
@@ -26,6 +38,16 @@ struct CameraSimParams {
   double noise_sigma = 1.5;             // grey levels
   double sky_albedo = 0.9;              // rays that hit nothing (outdoors)
   double max_range_m = 300.0;
+  std::vector<ExposureStep> exposure_steps;  // on top of the slow variation
+  std::vector<CameraOutage> outages;
+
+  // True when a frame at mid-exposure time t falls into an outage (it is not produced).
+  [[nodiscard]] bool in_outage(double t) const {
+    for (const auto& o : outages) {
+      if (t >= o.begin_s && t < o.end_s) return true;
+    }
+    return false;
+  }
 };
 
 // An 8-bit mono image, row-major, width * height bytes (no OpenCV in this header).

@@ -4,6 +4,8 @@
 #include <functional>
 
 #include "core/error.hpp"
+#include "drivers/lidar_family.hpp"
+#include "tools/sim/hesai_sim.hpp"
 #include "tools/sim/livox_sim.hpp"
 #include "tools/sim/ouster_sim.hpp"
 #include "tools/sim/velodyne_sim.hpp"
@@ -11,27 +13,32 @@
 namespace livod::sim {
 namespace {
 
+// What the model is (name, internal IMU, family) comes from the LiDAR families' tables
+// (drivers/lidar_family.hpp); this table only says which models the simulator writes.
 struct Entry {
   const char* model;
   const char* description;
-  bool internal_imu;
   std::function<std::unique_ptr<SimLidar>(const SimLidarOptions&)> make;
 };
 
 // One line per simulated model (SIM-LIDAR-REGISTRY).
 std::vector<Entry> entries() {
   return {
-      {"AVIA", "Livox Avia (SDK1), 6-line rosette, 240 kpts/s, internal IMU", true, make_sim_avia},
-      {"MID-360", "Livox Mid-360 (SDK2), 360 deg, 4 lines, 200 kpts/s, internal IMU", true,
+      {"AVIA", "Livox Avia (SDK1), 6-line rosette, 240 kpts/s, internal IMU", make_sim_avia},
+      {"MID-360", "Livox Mid-360 (SDK2), 360 deg, 4 lines, 200 kpts/s, internal IMU",
        make_sim_mid360},
-      {"OS1-64", "Ouster OS1-64, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU", true,
+      {"OS1-64", "Ouster OS1-64, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU",
        make_sim_os1_64},
-      {"OS1-128", "Ouster OS1-128, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU", true,
+      {"OS1-128", "Ouster OS1-128, 1024x10, RNG19_RFL8_SIG16_NIR16, FW 2.5, internal IMU",
        make_sim_os1_128},
-      {"VLP-16", "Velodyne VLP-16, 600 RPM, data + position packets", false, make_sim_vlp16},
+      {"VLP-16", "Velodyne VLP-16, 600 RPM, data + position packets", make_sim_vlp16},
       {"HDL-32E",
        "Velodyne HDL-32E, 600 RPM, data + position packets, internal IMU in the position packets",
-       true, make_sim_hdl32e},
+       make_sim_hdl32e},
+      {"PANDARXT32",
+       "Hesai PandarXT-32, 600 RPM, single return, UDP sequence, angle correction file beside "
+       "the capture",
+       make_sim_pandar_xt32},
       // SIM-LIDAR-REGISTRY: one line per simulated model
   };
 }
@@ -46,8 +53,10 @@ std::vector<std::pair<std::string, std::string>> simulated_lidar_models() {
 
 bool simulated_lidar_has_imu(const std::string& model) {
   const auto all = entries();
-  return std::any_of(all.begin(), all.end(),
-                     [&](const Entry& e) { return model == e.model && e.internal_imu; });
+  const bool simulated =
+      std::any_of(all.begin(), all.end(), [&](const Entry& e) { return model == e.model; });
+  const auto match = drivers::find_model(model);
+  return simulated && match && match->model->internal_imu;
 }
 
 std::unique_ptr<SimLidar> make_sim_lidar(const std::string& model, const SimLidarOptions& options) {

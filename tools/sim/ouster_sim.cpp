@@ -1,5 +1,7 @@
 #include "tools/sim/ouster_sim.hpp"
 
+#include "core/units.hpp"
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -37,7 +39,6 @@ constexpr std::uint16_t kColumnStatusValid = 1;
 constexpr std::size_t kLegacyImuPacketBytes = 48;
 constexpr std::uint16_t kLidarPort = 7502;
 constexpr std::uint16_t kImuPort = 7503;
-constexpr double kStandardGravity = 9.80665;  // m/s^2 per g, as the decoder converts
 constexpr double kDegreesPerRadian = 180.0 / std::numbers::pi;
 
 // LEGACY IMU stamps of a real OS1 (OS-1-64_1024x10_fw20.pcap): sys_ts ticks exactly every 10 ms,

@@ -11,9 +11,15 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "drivers/imu/bosch_mm7.hpp"
+#include "drivers/imu/candump_frames.hpp"
 #include "drivers/imu/sbg_can.hpp"
+#include "drivers/imu/xsens_mtdata2.hpp"
+#include "drivers/lidar_family.hpp"
 #include "io/candump.hpp"
 #include "io/pcap.hpp"
+#include "io/serial_capture.hpp"
+#include "io/tum_writer.hpp"
 #include "tools/sim/bag_output.hpp"
 #include "tools/sim/lidar_registry.hpp"
 #include "tools/sim/worlds.hpp"
@@ -61,22 +67,6 @@ std::int64_t epoch_ns(double host_epoch_s) {
   return static_cast<std::int64_t>(std::llround(host_epoch_s * 1e9));
 }
 
-// A host clock stamp in seconds with all nine decimals (TUM files are in seconds).
-std::string format_ns_as_seconds(std::int64_t ns) {
-  std::ostringstream os;
-  os << ns / 1'000'000'000 << '.' << std::setw(9) << std::setfill('0') << ns % 1'000'000'000;
-  return os.str();
-}
-
-std::string format_pose_row(std::int64_t t_ns, const Eigen::Vector3d& p, const Eigen::Matrix3d& R) {
-  const Eigen::Quaterniond q(R);
-  std::ostringstream os;
-  os << format_ns_as_seconds(t_ns) << std::fixed << std::setprecision(9) << ' ' << p.x() << ' '
-     << p.y() << ' ' << p.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w()
-     << '\n';
-  return os.str();
-}
-
 std::string yaml_vec(const Eigen::Vector3d& v) {
   std::ostringstream os;
   os << std::setprecision(12) << '[' << v.x() << ", " << v.y() << ", " << v.z() << ']';
@@ -99,13 +89,11 @@ void write_extrinsic(std::ostream& os, const Eigen::Isometry3d& T) {
      << "      rotation: {matrix: " << yaml_matrix(T.linear()) << "}\n";
 }
 
-const char* lidar_driver(const std::string& model) {
-  if (model.rfind("OS", 0) == 0) return "ouster";
-  if (model == "VLP-16" || model == "VLP-32C" || model == "HDL-32E" || model == "VLS-128") {
-    return "velodyne";
-  }
-  if (model == "MID-360" || model == "HAP") return "livox_sdk2";
-  return "livox_sdk1";
+// The configuration driver of a simulated model: its family's (drivers/lidar_family.hpp).
+const drivers::LidarFamily& lidar_family_of(const std::string& model) {
+  const auto match = drivers::find_model(model);
+  if (!match) throw Error("no LiDAR family has the simulated model '" + model + "'");
+  return *match->family;
 }
 
 // Simulated LiDAR datagrams arrive out of order when a delay spike holds one back; a capture is
@@ -229,9 +217,9 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     report.sensors.push_back({mount.name, "lidar", sink.written(), 0, pcap_path});
     BagLidarSource bag_lidar{mount.name,   mount.model, pcap_path,
                              std::nullopt, mount.clock, mount.imu};
-    for (const auto& f : side_files) {
-      if (f.extension() == ".json") bag_lidar.metadata = f;
-    }
+    // The one file beside the capture is what the family's decoder reads (metadata JSON or
+    // angle correction CSV).
+    if (!side_files.empty()) bag_lidar.decoder_file = side_files.front();
     bag.lidars.push_back(bag_lidar);
   }
 
@@ -254,24 +242,26 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     for (std::int64_t k = 0; k < n_samples; ++k) {
       const double t = static_cast<double>(k) * period;
       const ImuTruth m = imu.measure(scene.imu_truth(t, mount.T_body_imu));
-      const auto device_us = static_cast<std::uint32_t>(
-          static_cast<std::uint64_t>(clock.stamp_ns(t) / 1000) & 0xFFFFFFFFULL);
-      const auto frames = imu::encode_sbg_sample(device_us, m.accel_m_s2, m.gyro_rad_s, 35.0);
+      std::array<imu::CanRecord, 3> frames{};
+      if (mount.format == CanImuFormat::kSbg) {
+        const auto device_us = static_cast<std::uint32_t>(
+            static_cast<std::uint64_t>(clock.stamp_ns(t) / 1000) & 0xFFFFFFFFULL);
+        frames = imu::encode_sbg_sample(device_us, m.accel_m_s2, m.gyro_rad_s, 35.0);
+      } else {
+        // The MM7 has no clock; its 4-bit message counter counts samples.
+        frames = imu::encode_bosch_mm7_sample(static_cast<std::uint8_t>(k & 0x0F), m.accel_m_s2,
+                                              m.gyro_rad_s, 35.0);
+      }
       const double delay = link.delay_s();
       if (delay < 0.0) {
         ++rep.dropped;
         continue;
       }
       for (std::size_t f = 0; f < frames.size(); ++f) {
-        io::CanFrame cf;
-        cf.interface = "can0";
-        cf.id = frames[f].id;
-        cf.len = frames[f].len;
-        std::copy(frames[f].data.begin(), frames[f].data.end(), cf.data.begin());
         // candump logs have microsecond resolution.
         const double rx = epoch + t + delay + kFrameTime * static_cast<double>(f + 1);
-        cf.time_ns = static_cast<std::int64_t>(std::llround(rx * 1e6)) * 1000;
-        pending.push_back(cf);
+        frames[f].rx_time_ns = static_cast<std::int64_t>(std::llround(rx * 1e6)) * 1000;
+        pending.push_back(imu::to_candump_frame(frames[f], "can0"));
       }
     }
     std::stable_sort(
@@ -281,7 +271,77 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     writer.flush();
     rep.messages = pending.size();
     report.sensors.push_back(rep);
-    bag.can_imu = BagCanImuSource{mount.name, log_path, mount.clock};
+    bag.can_imu = BagCanImuSource{mount.name, log_path, mount.clock, mount.format};
+  }
+
+  // Serial IMU -> serial capture (the host's reads, torn messages and all).
+  if (scenario.serial_imu) {
+    const auto& mount = *scenario.serial_imu;
+    SensorClock clock(mount.clock, sub_seed(options.seed, mount.name + "/clock"));
+    ImuModel imu(mount.noise, sub_seed(options.seed, mount.name + "/noise"));
+    std::mt19937_64 wire(sub_seed(options.seed, mount.name + "/wire"));
+    SceneContext scene;
+    scene.world = &world;
+    scene.trajectory = &trajectory;
+    const auto path = options.out_dir / (mount.name + ".serial");
+    io::SerialCaptureWriter writer(path);
+    SimSensorReport rep{mount.name, "serial_imu", 0, 0, path};
+    const double period = 1.0 / mount.noise.rate_hz;
+    const double byte_time = 10.0 / mount.baud_rate;  // start + 8 data + stop bits
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::uniform_int_distribution<std::size_t> read_size(1, mount.max_read_bytes);
+    // The line: every byte with the time its stop bit ends (scenario time).
+    std::vector<std::pair<double, std::uint8_t>> line;
+    double line_free = 0.0;
+    const auto n_samples = static_cast<std::int64_t>(std::floor(duration / period));
+    for (std::int64_t k = 0; k < n_samples; ++k) {
+      const double t = static_cast<double>(k) * period;
+      const ImuTruth m = imu.measure(scene.imu_truth(t, mount.T_body_imu));
+      imu::XsensSample x;
+      x.packet_counter = static_cast<std::uint16_t>(k & 0xFFFF);
+      x.sample_time_fine = static_cast<std::uint32_t>(
+          static_cast<std::uint64_t>(clock.stamp_ns(t) / 100'000) & 0xFFFFFFFFULL);
+      x.accel_m_s2 = m.accel_m_s2;
+      x.gyro_rad_s = m.gyro_rad_s;
+      auto bytes = imu::encode_mtdata2_sample(x);
+      if (unit(wire) < mount.corrupt_probability) {
+        // One flipped bit past the header: the checksum fails and the sample is lost.
+        bytes[bytes.size() - 1 - wire() % (bytes.size() - 5)] ^=
+            static_cast<std::uint8_t>(1U << (wire() % 8));
+        ++rep.dropped;
+      }
+      if (unit(wire) < mount.noise_probability) {
+        const auto n = 1 + wire() % 8;
+        std::vector<std::uint8_t> noise(n);
+        for (auto& b : noise) b = static_cast<std::uint8_t>(wire());
+        bytes.insert(bytes.begin(), noise.begin(), noise.end());
+      }
+      double at = std::max(t, line_free);
+      for (const auto b : bytes) {
+        at += byte_time;
+        line.emplace_back(at, b);
+      }
+      line_free = at;
+    }
+    // The host's reads: random sizes, each returned a random latency after its last byte.
+    std::exponential_distribution<double> latency(
+        mount.read_latency_s > 0.0 ? 1.0 / mount.read_latency_s : 1e12);
+    std::int64_t last_rx = 0;
+    std::vector<std::byte> chunk;
+    for (std::size_t i = 0; i < line.size();) {
+      const std::size_t n = std::min(read_size(wire), line.size() - i);
+      chunk.clear();
+      for (std::size_t j = 0; j < n; ++j)
+        chunk.push_back(static_cast<std::byte>(line[i + j].second));
+      const double arrived = line[i + n - 1].first;
+      const std::int64_t rx = std::max(last_rx, epoch_host_ns + to_ns(arrived + latency(wire)));
+      writer.write(rx, chunk);
+      last_rx = rx;
+      i += n;
+      ++rep.messages;
+    }
+    writer.flush();
+    report.sensors.push_back(rep);
   }
 
   // Cameras -> EuRoC/ASL folders.
@@ -297,6 +357,7 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     SimSensorReport rep{cam.name, "camera", 0, 0, dir};
     const double period = 1.0 / cam.params.rate_hz;
     for (double t = period / 2; t < duration; t += period) {
+      if (cam.params.in_outage(t)) continue;
       const double exposure = sim.exposure_at(t);
       const Eigen::Isometry3d T_world_cam = trajectory.at(t).T_world_body() * cam.T_body_cam;
       const std::int64_t stamp = epoch_host_ns + to_ns(t + cam.time_offset_s);
@@ -317,17 +378,18 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
 
   // Ground truth of the body (IMU) frame on the host clock.
   {
-    std::ofstream gt(options.out_dir / "groundtruth.txt");
-    gt << "# timestamp tx ty tz qx qy qz qw  (livod sim: body/IMU frame in the world frame, "
-          "host clock)\n";
+    io::TumWriter gt(options.out_dir / "groundtruth.txt",
+                     "timestamp tx ty tz qx qy qz qw  (livod sim: body/IMU frame in the world "
+                     "frame, host clock)");
     const double period = 1.0 / scenario.groundtruth_rate_hz;
     const auto n = static_cast<std::int64_t>(std::floor(duration / period)) + 1;
     for (std::int64_t k = 0; k < n; ++k) {
       const double t = static_cast<double>(k) * period;
       const auto s = trajectory.at(t);
-      gt << format_pose_row(epoch_host_ns + to_ns(t), s.p_world, s.R_world_body);
+      gt.write(epoch_host_ns + to_ns(t), s.R_world_body, s.p_world);
       ++report.groundtruth_poses;
     }
+    gt.close();
   }
 
   // A livod configuration that replays the outputs.
@@ -342,12 +404,15 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     cfg << "body_frame: " << scenario.body_imu << (body_is_lidar_imu ? ".imu" : "") << "\n";
     cfg << "sensors:\n";
     for (const auto& mount : scenario.lidars) {
+      const drivers::LidarFamily& family = lidar_family_of(mount.model);
       cfg << "  - name: " << mount.name << "\n"
-          << "    driver: " << lidar_driver(mount.model) << "\n"
+          << "    driver: " << family.driver << "\n"
           << "    model: " << mount.model << "\n"
           << "    source:\n      replay: {file: " << mount.name << ".pcap}\n";
-      if (lidar_driver(mount.model) == std::string("ouster")) {
+      if (family.file == drivers::DecoderFile::kMetadata) {
         cfg << "    metadata: " << mount.name << ".json\n";
+      } else if (family.file == drivers::DecoderFile::kCalibrationRequired) {
+        cfg << "    calibration: " << mount.name << ".csv\n";
       }
       // Livox sensors stream without scans: the decoder cuts them every period.
       const std::string driver = lidar_driver(mount.model);
@@ -363,18 +428,29 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     }
     if (scenario.can_imu) {
       const auto& imu = *scenario.can_imu;
-      cfg << "  - name: " << imu.name << "\n    driver: can_imu\n    model: SBG\n"
+      const bool sbg = imu.format == CanImuFormat::kSbg;
+      cfg << "  - name: " << imu.name
+          << "\n    driver: can_imu\n    model: " << (sbg ? "SBG" : "MM7.10") << "\n"
           << "    source:\n      replay: {file: " << imu.name << ".log}\n"
-          << "    can: {decoder: sbg}\n";
+          << "    can: {decoder: " << (sbg ? "sbg" : "bosch_mm7") << "}\n";
+      if (!sbg) {
+        // No sensor clock: receive time minus the mean bus + link latency of TX1.
+        const double latency = imu.link.delay_floor_s + imu.link.delay_mean_s + 232e-6;
+        cfg << "    clock: {mode: receive_time, latency_s: " << latency << "}\n";
+      }
       if (imu.name != scenario.body_imu) write_extrinsic(cfg, imu.T_body_imu);
+    }
+    if (scenario.serial_imu) {
+      cfg << "  # " << scenario.serial_imu->name << ".serial: an Xsens MTi's serial stream (livod "
+          << "serial capture); livod replay does not read serial captures yet.\n";
     }
     for (const auto& cam : scenario.cameras) {
       const auto& k = cam.params.intrinsics;
-      // The estimator has no visual update yet: the camera is written (its calibration and images
-      // are part of the sequence) but disabled, as check-config requires.
-      cfg << "  - name: " << cam.name << "\n    driver: v4l2\n    model: generic\n"
-          << "    enabled: false\n"
-          << "    source:\n      replay: {file: mav0/" << cam.name << "}\n"
+      cfg << "  - name: " << cam.name << "\n    driver: v4l2\n    model: generic\n";
+      // Without images (--no-images) the folder lists frames it does not have: the camera stays
+      // in the file, disabled, so that the configuration replays as LiDAR-inertial.
+      if (!options.write_images) cfg << "    enabled: false  # written with --no-images\n";
+      cfg << "    source:\n      replay: {file: mav0/" << cam.name << "}\n"
           << "    camera: {model: "
           << (k.model == CameraIntrinsics::Model::kEquidistant ? "equidistant" : "pinhole")
           << ", width: " << k.width << ", height: " << k.height << ", intrinsics: [" << k.fx << ", "

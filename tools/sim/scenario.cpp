@@ -1,5 +1,7 @@
 #include "tools/sim/scenario.hpp"
 
+#include "core/units.hpp"
+
 #include <array>
 #include <cmath>
 
@@ -242,7 +244,7 @@ LidarMount hdl32e(const std::string& name) {
   m.range = datasheet_range_model("HDL-32E");
   m.imu_noise.rate_hz = 1.0 / 4.988e-3;  // one sample per position packet (velodyne_sim.hpp)
   m.imu_noise.gyro_noise_density = 0.05 * M_PI / 180.0;
-  m.imu_noise.accel_noise_density = 200e-6 * 9.80665;
+  m.imu_noise.accel_noise_density = 200e-6 * kStandardGravity;
   m.imu_noise.gyro_bias0 = Eigen::Vector3d(-0.092, 0.064, 0.512);
   m.imu_noise.accel_bias0 = Eigen::Vector3d(0.04, -0.03, 0.06);
   return m;
@@ -264,10 +266,17 @@ Scenario base(const std::string& name, const std::string& description, WorldKind
 }
 
 // The built-in scenarios, in the order they are listed.
-constexpr std::array<const char*, 9> kScenarioNames{
-    "room_handheld_os1_64",   "room_handheld_avia",   "room_handheld_mid360",
-    "room_aggressive_os1_64", "street_vehicle_vlp16", "street_vehicle_hdl32e",
-    "street_vehicle_os1_128", "street_drone_os1_64",  "corridor_handheld_os1_64"};
+constexpr std::array<const char*, 11> kScenarioNames{"room_handheld_os1_64",
+                                                     "room_handheld_avia",
+                                                     "room_handheld_mid360",
+                                                     "room_aggressive_os1_64",
+                                                     "street_vehicle_vlp16",
+                                                     "street_vehicle_hdl32e",
+                                                     "street_vehicle_os1_128",
+                                                     "street_drone_os1_64",
+                                                     "corridor_handheld_os1_64",
+                                                     "corridor_handheld_os1_64_camera",
+                                                     "room_handheld_os1_64_camera_faults"};
 
 }  // namespace
 
@@ -359,6 +368,35 @@ Scenario make_scenario(const std::string& name) {
     Scenario s = base(name, "long featureless corridor (LiDAR-degenerate along x), Ouster OS1-64",
                       WorldKind::kCorridor, corridor_walk(), 30.0);
     s.lidars.push_back(ouster("OS1-64", "os1"));
+    s.body_imu = "os1";
+    return s;
+  }
+  if (name == "corridor_handheld_os1_64_camera") {
+    // The corridor's walls, floor and ceiling are textured: the camera sees the motion along the
+    // axis that the LiDAR cannot.
+    Scenario s = base(name,
+                      "long featureless corridor (LiDAR-degenerate along x) with textured walls, "
+                      "Ouster OS1-64 + 640x512 camera",
+                      WorldKind::kCorridor, corridor_walk(), 30.0);
+    s.lidars.push_back(ouster("OS1-64", "os1"));
+    s.cameras.push_back(rig_camera());
+    s.body_imu = "os1";
+    return s;
+  }
+  if (name == "room_handheld_os1_64_camera_faults") {
+    // Auto-exposure-like steps (x2 at 6 s, x0.5 at 10 s) and a camera that stops for 5 s
+    // (13-18 s). A fixed base exposure, low enough that the doubled one does not saturate.
+    Scenario s = base(name,
+                      "indoor room, handheld walk, Ouster OS1-64 + camera whose exposure steps x2 "
+                      "and x0.5 and whose images stop for 5 s",
+                      WorldKind::kRoom, handheld_room(), 22.0);
+    s.lidars.push_back(ouster("OS1-64", "os1"));
+    CameraMount cam = rig_camera();
+    cam.params.exposure_s = 0.002;
+    cam.params.exposure_variation = 0.0;
+    cam.params.exposure_steps = {{6.0, 2.0}, {10.0, 0.5}};
+    cam.params.outages = {{13.0, 18.0}};
+    s.cameras.push_back(cam);
     s.body_imu = "os1";
     return s;
   }

@@ -39,13 +39,33 @@ struct CameraMount {
   double time_offset_s = 0.0;  // stamps = true mid-exposure + this (a calibration error to find)
 };
 
-// An IMU on the CAN bus (SBG Ellipse layout, sensor-protocols.md 7.1 example B).
+// The wire format of the CAN IMU: SBG Ellipse (sensor-protocols.md 7.1 example B; a device
+// microsecond counter) or Bosch MM7.10 (example A; no timestamp, a 4-bit message counter).
+enum class CanImuFormat { kSbg, kBoschMm7 };
+
+// An IMU on the CAN bus.
 struct CanImuMount {
   std::string name = "can_imu";
+  CanImuFormat format = CanImuFormat::kSbg;
   Eigen::Isometry3d T_body_imu = Eigen::Isometry3d::Identity();
   ImuNoiseParams noise;
-  ClockFaults clock;  // of its microsecond counter
+  ClockFaults clock;  // of its microsecond counter (SBG; the MM7 has no clock)
   LinkFaults link;    // bus + driver latency to the host receive stamp
+};
+
+// An Xsens MTi on a serial line (MTData2 messages, float32, with PacketCounter, SampleTimeFine,
+// Acceleration, RateOfTurn, StatusWord), as the host reads it: in chunks that end anywhere, so
+// messages are torn across reads; optionally with corrupted messages and line noise.
+struct SerialImuMount {
+  std::string name = "serial_imu";
+  Eigen::Isometry3d T_body_imu = Eigen::Isometry3d::Identity();
+  ImuNoiseParams noise = ImuNoiseParams{.rate_hz = 400.0};
+  ClockFaults clock;                 // of SampleTimeFine (10 kHz ticks)
+  int baud_rate = 921600;            // 10 bits per byte on the wire
+  double read_latency_s = 1e-3;      // mean of the exponential host read latency (adapter + OS)
+  std::size_t max_read_bytes = 64;   // reads return 1..max bytes (uniform)
+  double corrupt_probability = 0.0;  // per message: one byte flipped (checksum error)
+  double noise_probability = 0.0;    // per message: 1..8 random bytes on the line before it
 };
 
 struct Scenario {
@@ -61,6 +81,7 @@ struct Scenario {
   std::vector<LidarMount> lidars;
   std::vector<CameraMount> cameras;
   std::optional<CanImuMount> can_imu;
+  std::optional<SerialImuMount> serial_imu;  // not a body IMU candidate: not replayable yet
   // Which IMU defines the body frame: "<lidar name>" (its internal IMU) or the CAN IMU's name.
   std::string body_imu;
   double groundtruth_rate_hz = 200.0;

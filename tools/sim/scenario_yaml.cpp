@@ -23,6 +23,12 @@
 //   scene: {pedestrians: 2, cars: 1, foliage: true}   # per 100 m of street / per room
 //   body_imu: avia
 //   cameras: []                   # clears the base's cameras (only clearing is supported)
+//   can_imu:                      # adds or changes the CAN IMU
+//     {name: can_imu, format: sbg | bosch_mm7, rate_hz: 100, translation: [0, 0, 0],
+//      rpy_deg: [0, 0, 0]}
+//   serial_imu:                   # adds an Xsens MTi on a serial line (decoder tests)
+//     {name: xsens, rate_hz: 400, baud_rate: 921600, max_read_bytes: 64, read_latency_s: 1e-3,
+//      corrupt_probability: 0.01, noise_probability: 0.01, clock: {offset_s: 3, skew_ppm: -30}}
 
 #include <yaml-cpp/yaml.h>
 
@@ -89,6 +95,18 @@ Eigen::Vector3d vec3(const YAML::Node& n, const std::string& path, Problems& p) 
   return Eigen::Vector3d::Zero();
 }
 
+// translation / rpy_deg (ZYX, degrees) of a mount, when given.
+void read_pose(const YAML::Node& n, const std::string& path, Eigen::Isometry3d& T, Problems& p) {
+  if (n["translation"]) T.translation() = vec3(n["translation"], path + ".translation", p);
+  if (n["rpy_deg"]) {
+    const Eigen::Vector3d r = vec3(n["rpy_deg"], path + ".rpy_deg", p) * (M_PI / 180.0);
+    T.linear() = (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
+                  Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+  }
+}
+
 void read_function(const YAML::Node& n, SmoothFunction& f, const std::string& path, Problems& p) {
   if (!n) return;
   check_keys(n, {"c0", "c1", "terms"}, path, p);
@@ -127,7 +145,8 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
   Scenario s;
   check_keys(root,
              {"base", "name", "description", "world", "street_length_m", "duration_s", "trajectory",
-              "lidars", "cameras", "body_imu", "groundtruth_rate_hz", "scene"},
+              "lidars", "cameras", "body_imu", "groundtruth_rate_hz", "scene", "can_imu",
+              "serial_imu"},
              "scenario", p);
   if (!root.IsMap()) throw Error(file.string() + ": a scenario file is a YAML mapping");
   if (const auto base = root["base"]) {
@@ -283,12 +302,72 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
       s.cameras.clear();
     }
   }
+  if (const auto c = root["can_imu"]) {
+    const std::string path = "scenario.can_imu";
+    check_keys(c, {"name", "format", "rate_hz", "translation", "rpy_deg"}, path, p);
+    CanImuMount m = s.can_imu.value_or(CanImuMount{});
+    read(c, "name", m.name, path, p);
+    read(c, "rate_hz", m.noise.rate_hz, path, p);
+    std::string format = m.format == CanImuFormat::kSbg ? "sbg" : "bosch_mm7";
+    read(c, "format", format, path, p);
+    if (format == "sbg") {
+      m.format = CanImuFormat::kSbg;
+    } else if (format == "bosch_mm7") {
+      m.format = CanImuFormat::kBoschMm7;
+    } else {
+      p.add(c["format"], path + ".format", "expected sbg or bosch_mm7");
+    }
+    if (!(m.noise.rate_hz > 0.0 && m.noise.rate_hz <= 1000.0)) {
+      p.add(c["rate_hz"], path + ".rate_hz", "must be within (0, 1000]");
+    }
+    read_pose(c, path, m.T_body_imu, p);
+    s.can_imu = m;
+  }
+  if (const auto c = root["serial_imu"]) {
+    const std::string path = "scenario.serial_imu";
+    check_keys(c,
+               {"name", "rate_hz", "baud_rate", "max_read_bytes", "read_latency_s",
+                "corrupt_probability", "noise_probability", "clock", "translation", "rpy_deg"},
+               path, p);
+    SerialImuMount m = s.serial_imu.value_or(SerialImuMount{});
+    read(c, "name", m.name, path, p);
+    read(c, "rate_hz", m.noise.rate_hz, path, p);
+    read(c, "baud_rate", m.baud_rate, path, p);
+    read(c, "max_read_bytes", m.max_read_bytes, path, p);
+    read(c, "read_latency_s", m.read_latency_s, path, p);
+    read(c, "corrupt_probability", m.corrupt_probability, path, p);
+    read(c, "noise_probability", m.noise_probability, path, p);
+    if (const auto k = c["clock"]) {
+      check_keys(k, {"offset_s", "skew_ppm", "jitter_s", "reset_at_s"}, path + ".clock", p);
+      read(k, "offset_s", m.clock.offset_s, path + ".clock", p);
+      read(k, "skew_ppm", m.clock.skew_ppm, path + ".clock", p);
+      read(k, "jitter_s", m.clock.jitter_s, path + ".clock", p);
+      read(k, "reset_at_s", m.clock.reset_at_s, path + ".clock", p);
+    }
+    if (!(m.noise.rate_hz > 0.0 && m.noise.rate_hz <= 2000.0)) {
+      p.add(c["rate_hz"], path + ".rate_hz", "must be within (0, 2000]");
+    }
+    if (m.baud_rate < 9600) p.add(c["baud_rate"], path + ".baud_rate", "must be >= 9600");
+    if (m.max_read_bytes < 1) p.add(c["max_read_bytes"], path + ".max_read_bytes", "must be >= 1");
+    for (const double q : {m.corrupt_probability, m.noise_probability}) {
+      if (q < 0.0 || q > 1.0) p.add(c, path, "probabilities must be within [0, 1]");
+    }
+    if (m.read_latency_s < 0.0)
+      p.add(c["read_latency_s"], path + ".read_latency_s", "must be >= 0");
+    read_pose(c, path, m.T_body_imu, p);
+    s.serial_imu = m;
+  }
+  if (s.serial_imu && s.serial_imu->name == s.body_imu) {
+    p.add(root["body_imu"], "scenario.body_imu",
+          "the serial IMU cannot be the body IMU (livod replay does not read serial captures yet)");
+  }
   if (s.name.empty()) p.add(root, "scenario.name", "required (or give a base)");
   if (!(std::isfinite(s.duration_s) && s.duration_s > 0.0 && s.duration_s <= 3600.0)) {
     p.add(root["duration_s"], "scenario.duration_s", "must be a number of seconds in (0, 3600]");
   }
   bool body_found = s.can_imu && s.can_imu->name == s.body_imu;
   for (const auto& l : s.lidars) body_found = body_found || l.name == s.body_imu;
+  body_found = body_found || (s.serial_imu && s.serial_imu->name == s.body_imu);
   if (!body_found) p.add(root["body_imu"], "scenario.body_imu", "must name a LiDAR or the CAN IMU");
   if (!p.empty()) throw Error(file.string() + ": invalid scenario:" + p.text());
   return s;

@@ -36,7 +36,7 @@ Hdl32eMotionWords encode_hdl32e_motion(const Eigen::Vector3d& gyro_rad_s,
   // gyro = (g1, -g2, -g3) and accel = ((-a2y - a3y)/2, (a1y - a3x)/2, (a1x + a2x)/2), so each
   // sensor reads the components below; both words of an axis carry the same reading.
   const Eigen::Vector3d w = gyro_rad_s * kRadToDeg;
-  const Eigen::Vector3d a = accel_m_s2 / vel::kHdlStandardGravity;
+  const Eigen::Vector3d a = accel_m_s2 / kStandardGravity;
   struct Reading {
     double gyro_deg_s, accel_x_g, accel_y_g;
   };

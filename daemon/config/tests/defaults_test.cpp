@@ -191,6 +191,43 @@ realtime: {capture_priority: 60, scheduler_priority: 50, lock_memory: true}
   EXPECT_TRUE(c.realtime.lock_memory);
 }
 
+TEST(ConfigDefaults, VisualUpdateKeys) {
+  const auto result = load(minimal_config() + R"(estimator:
+  vio:
+    huber_k: 2.0
+    min_patches: 20
+    max_view_angle_deg: 70
+    min_corner_score: 9
+    max_observations: 12
+    observation_distance_m: 0.3
+    observation_angle_deg: 10
+    observation_pixels: 25
+    image_timeout_s: 0.08
+    convergence: {rotation_deg: 0.002, translation_m: 0.00002}
+)");
+  ASSERT_TRUE(result.problems.empty()) << dump(result);
+  const auto& v = result.config.estimator.vio;
+  EXPECT_DOUBLE_EQ(v.huber_k, 2.0);
+  EXPECT_EQ(v.min_patches, 20);
+  EXPECT_DOUBLE_EQ(v.max_view_angle_deg, 70.0);
+  EXPECT_DOUBLE_EQ(v.min_corner_score, 9.0);
+  EXPECT_EQ(v.max_observations, 12);
+  EXPECT_DOUBLE_EQ(v.observation_distance_m, 0.3);
+  EXPECT_DOUBLE_EQ(v.observation_angle_deg, 10.0);
+  EXPECT_DOUBLE_EQ(v.observation_pixels, 25.0);
+  EXPECT_DOUBLE_EQ(v.image_timeout_s, 0.08);
+  EXPECT_DOUBLE_EQ(v.convergence.rotation_deg, 0.002);
+  EXPECT_DOUBLE_EQ(v.convergence.translation_m, 0.00002);
+  // Defaults of the keys FAST-LIVO2 does not have.
+  const auto d = load(minimal_config());
+  EXPECT_DOUBLE_EQ(d.config.estimator.vio.huber_k, 1.345);
+  EXPECT_EQ(d.config.estimator.vio.max_observations, 8);
+  // Out of range: an error naming the key.
+  const auto bad = load(minimal_config() + "estimator: {vio: {max_view_angle_deg: 120}}\n");
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(dump(bad).find("max_view_angle_deg"), std::string::npos) << dump(bad);
+}
+
 TEST(ConfigDefaults, LcmChannelsAndBotCorePose) {
   const auto result = load(minimal_config() + R"(outputs:
   lcm:

@@ -155,9 +155,14 @@ TEST(ConfigProblems, InvalidValues) {
     EXPECT_NE(p.message.find("(did you mean 'velodyne'?)"), std::string::npos) << p.message;
   }
   {
-    const auto p = only_problem(load(edited("model: VLP-16", "model: VLP16")),
+    const auto p = only_problem(load(edited("model: VLP-16", "model: VLP-61")),
                                 ProblemKind::invalid_value, "sensors[0].model");
     EXPECT_NE(p.message.find("(did you mean 'VLP-16'?)"), std::string::npos) << p.message;
+    // Case, '-', '_' and spaces do not matter (the families' one normalisation, as for
+    // `livod decode`); the canonical spelling is kept.
+    const auto loose = load(edited("model: VLP-16", "model: vlp_16"));
+    EXPECT_TRUE(loose.ok()) << dump(loose);
+    EXPECT_EQ(loose.config.sensors[0].model, "VLP-16");
   }
   only_problem(load(edited("name: lidar", "name: Front-Lidar")), ProblemKind::invalid_value,
                "sensors[0].name");
@@ -489,7 +494,7 @@ TEST(ConfigProblems, InconsistentEstimatorSettings) {
 TEST(ConfigProblems, NoLidarIsAnError) {
   const auto result = load(R"(body_frame: imu
 sensors:
-  - {name: imu, driver: serial_imu, source: {device: {path: /dev/ttyUSB0}}, serial: {protocol: vectornav_binary}}
+  - {name: imu, driver: serial_imu, source: {device: {path: /dev/ttyUSB0}}, serial: {protocol: xsens_mtdata2}}
 )");
   only_problem(result, ProblemKind::inconsistent, "sensors");
 }
@@ -649,11 +654,34 @@ TEST(ConfigImplemented, WhatCannotRunIsAnError) {
     camera: {width: 640, height: 512, intrinsics: [500, 500, 320, 256]}
     extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
 )";
-  EXPECT_EQ(not_implemented(camera), std::vector<std::string>{"sensors[1].enabled"});
+  // A live camera: no live camera source runs yet (its recording can be replayed).
+  EXPECT_EQ(not_implemented(camera), std::vector<std::string>{"sensors[1].source"});
   // Disabled, the camera keeps its calibration in the file and is no problem.
   std::string disabled = camera;
   disabled.replace(disabled.find("    driver: aravis"), 0, "    enabled: false\n");
   EXPECT_TRUE(not_implemented(disabled).empty());
+  // Replayed frames feed the visual update.
+  const std::string live_source = "{device: {camera_id: \"\"}}";
+  std::string replayed = camera;
+  replayed.replace(replayed.find(live_source), live_source.size(), "{replay: {file: mav0/cam0}}");
+  EXPECT_TRUE(not_implemented(replayed).empty());
+  // The visual update takes one camera: a second enabled one is refused.
+  std::string two_cameras = replayed;
+  two_cameras += replayed.substr(replayed.find("  - name: cam\n"));
+  two_cameras.replace(two_cameras.rfind("name: cam"), 9, "name: cam2");
+  EXPECT_EQ(not_implemented(two_cameras), std::vector<std::string>{"sensors[2].enabled"});
+  // estimator.vio.enabled false: the camera is left out, with a warning that says so.
+  const ConfigResult no_vio =
+      load_config_from_string(replayed + "estimator: {vio: {enabled: false}}\n", "test.yaml");
+  bool warned = false;
+  for (const auto& p : no_vio.problems) {
+    EXPECT_NE(p.kind, ProblemKind::not_implemented) << p.message;
+    if (p.severity == Severity::warning && p.path == "sensors[1].enabled" &&
+        p.message.find("estimator.vio.enabled is false") != std::string::npos) {
+      warned = true;
+    }
+  }
+  EXPECT_TRUE(warned);
 
   const std::string two_lidars = std::string(kLidar) + R"(  - name: vlp
     driver: velodyne
@@ -684,6 +712,14 @@ sensors:
     can: {decoder: sbg}
 )";
   EXPECT_EQ(not_implemented(live_can), std::vector<std::string>{"sensors[1].source"});
+
+  // The serial IMU drivers exist (drivers/imu), but neither `livod run` nor `livod replay` can
+  // feed one to the estimator yet.
+  std::string live_serial = live_can;
+  live_serial.replace(live_serial.find("    driver: can_imu"), std::string::npos,
+                      "    driver: serial_imu\n    source: {device: {path: /dev/ttyUSB0}}\n"
+                      "    serial: {protocol: xsens_mtdata2}\n");
+  EXPECT_EQ(not_implemented(live_serial), std::vector<std::string>{"sensors[1].driver"});
 }
 
 }  // namespace

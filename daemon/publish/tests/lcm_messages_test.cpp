@@ -518,11 +518,11 @@ TEST(LcmMessages, EmptyHealthEncodes) {
 }
 
 TEST(LcmMessages, SensorHealthFromCaptureAndClock) {
-  drivers::SourceHealth src;
+  drivers::capture::SourceHealth src;
   src.name = "hdl32";
-  drivers::StreamHealth lidar;
+  drivers::capture::StreamHealth lidar;
   lidar.name = "lidar";
-  lidar.state = drivers::StreamState::kStreaming;
+  lidar.state = drivers::capture::StreamState::kStreaming;
   lidar.packets_per_s = 1808.0;
   lidar.megabits_per_s = 18.0;
   lidar.last_packet_age = std::chrono::microseconds(400);
@@ -533,9 +533,9 @@ TEST(LcmMessages, SensorHealthFromCaptureAndClock) {
   lidar.capture.ring_overruns = 4;
   lidar.capture.truncated = 5;
   lidar.capture.receive_errors = 6;
-  drivers::StreamHealth position = lidar;
+  drivers::capture::StreamHealth position = lidar;
   position.name = "position";
-  position.state = drivers::StreamState::kWaiting;
+  position.state = drivers::capture::StreamState::kWaiting;
   position.packets_per_s = 0.0;
   position.last_packet_age.reset();
   position.capture = {};
@@ -591,13 +591,13 @@ TEST(LcmMessages, SensorHealthFromCaptureAndClock) {
   EXPECT_EQ(r.streams[1].state, SensorState::kWaiting);
 
   // A stale stream makes the sensor stale; no clock leaves the clock fields empty.
-  src.streams[1].state = drivers::StreamState::kStale;
+  src.streams[1].state = drivers::capture::StreamState::kStale;
   const SensorHealthRecord stale = sensor_health_record(src, "velodyne", nullptr, {});
   EXPECT_EQ(stale.state, SensorState::kStale);
   EXPECT_EQ(stale.clock_mode, "");
   EXPECT_EQ(stale.clock_offset_ns, 0);
   // All streaming -> streaming.
-  src.streams[1].state = drivers::StreamState::kStreaming;
+  src.streams[1].state = drivers::capture::StreamState::kStreaming;
   EXPECT_EQ(sensor_health_record(src, "velodyne", nullptr, {}).state, SensorState::kStreaming);
 }
 

@@ -11,7 +11,7 @@
 
 #include "core/spsc_ring.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 TEST(Doorbell, RingBeforeWaitReturnsAtOnce) {
@@ -57,4 +57,4 @@ TEST(Doorbell, NoLostWakeUps) {
 }
 
 }  // namespace
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

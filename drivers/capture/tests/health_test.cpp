@@ -6,7 +6,7 @@
 
 #include <stdexcept>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 constexpr std::int64_t kSecond = 1'000'000'000;
@@ -168,4 +168,4 @@ TEST(SourceHealth, LostPacketsAddEveryDropSourceAndTheLineNamesThem) {
 }
 
 }  // namespace
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

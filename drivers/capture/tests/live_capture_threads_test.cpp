@@ -21,7 +21,7 @@
 #include "io/udp_socket.hpp"
 #include "tests/support/data_dir.hpp"
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 using std::chrono::milliseconds;
@@ -393,4 +393,4 @@ TEST(LivePath, UnusableRealtimeRequestsAreReportedNotFatal) {
 }
 
 }  // namespace
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-namespace livod::drivers {
+namespace livod::drivers::capture {
 namespace {
 
 // A payload whose bytes are all derived from `tag`, `size` bytes long (size >= 4).
@@ -154,4 +154,4 @@ TEST(PacketRing, ProducerAndConsumerThreadsExchangeIntactPayloads) {
 }
 
 }  // namespace
-}  // namespace livod::drivers
+}  // namespace livod::drivers::capture

@@ -28,6 +28,9 @@ namespace {
 using std::chrono::milliseconds;
 using std::chrono::steady_clock;
 namespace sdk1 = livox::sdk1;
+using livox::LivoxSupervisor;
+using livox::LivoxSupervisorConfig;
+using namespace capture;  // NOLINT(google-build-using-namespace): a test of the capture runtime
 
 constexpr std::uint32_t kHostIp = 0x7F000001;
 constexpr std::uint32_t kAviaPointIntervalNs = 4167;

@@ -96,7 +96,7 @@ TEST(LivoxDecoder, AviaSdk1GapsFromTimestampsAndMalformedPacketsAreCounted) {
   dec.flush(out.sinks());
   EXPECT_EQ(dec.counters().sequence_gaps, 2u);
   EXPECT_EQ(dec.counters().decode_errors, 1u);
-  EXPECT_EQ(dec.decode_error_count(DecodeError::kUnknownDataType), 1u);
+  EXPECT_EQ(dec.decode_error_count(DecodeError::kBadVersion), 1u);
   ASSERT_EQ(out.scans.size(), 1u);
   EXPECT_EQ(out.scans[0].size(), 48u * 96u);
   EXPECT_EQ(out.scans[0].ring[7], 1);  // line = point index mod 6
@@ -146,6 +146,97 @@ TEST(LivoxDecoder, AClockResetRestartsTheTimeline) {
   for (const auto& s : out.scans) total += s.size();
   EXPECT_EQ(total, 800U * 96U);
   EXPECT_EQ(out.scans.back().start.sensor.ns, 100'000'000);
+  EXPECT_EQ(dec.counters().clock_jumps, 1U);
+  EXPECT_EQ(dec.counters().sequence_gaps, 0U);
+}
+
+// Issue 13, defect 1: a Velodyne capture decoded as an Avia gave ~20 000 garbage points and fake
+// IMU samples with no decode error. Every foreign datagram is an error and yields nothing.
+TEST(LivoxDecoder, ForeignTrafficYieldsNoPointsAndNoImu) {
+  for (const char* model : {"AVIA", "HORIZON", "TELE-15", "MID-40", "MID-70", "MID-360", "HAP"}) {
+    LivoxDecoder dec(*livox_model(model), LivoxDecoderOptions{});
+    Collected out;
+    std::vector<std::byte> velodyne(1206, std::byte{0x20});
+    std::vector<std::byte> position(512, std::byte{0x00});
+    // An SDK1 header with a foreign version byte and 100 trailing bytes.
+    Sdk1Header h;
+    auto foreign = encode_sdk1_points(h, points(1.0F));
+    foreign[0] = std::byte{0xFF};
+    foreign.insert(foreign.end(), 100, std::byte{1});
+    for (int k = 0; k < 50; ++k) {
+      for (std::size_t b = 0; b < 12; ++b) {
+        velodyne[b * 100] = std::byte{0xFF};
+        velodyne[b * 100 + 1] = std::byte{0xEE};
+        velodyne[b * 100 + 9] = static_cast<std::byte>(k % 9);
+      }
+      dec.on_packet({velodyne, k * 1'000'000LL, 2368}, out.sinks());
+      dec.on_packet({position, k * 1'000'000LL, 8308}, out.sinks());
+      dec.on_packet({foreign, k * 1'000'000LL, 56001}, out.sinks());
+    }
+    dec.flush(out.sinks());
+    EXPECT_TRUE(out.scans.empty()) << model;
+    EXPECT_TRUE(out.imu.empty()) << model;
+    EXPECT_EQ(dec.counters().decode_errors, 150U) << model;
+    EXPECT_EQ(dec.counters().lidar_packets + dec.counters().imu_packets, 0U) << model;
+  }
+}
+
+// Issue 13, defect 2: an SDK1 sensor whose clock jumps forward (it gains PTP or GPS sync
+// mid-stream) reported 4 249 660 024 696 sequence gaps. The jump is a clock event; only the
+// packets really lost (one before the jump, two after) are gaps.
+TEST(LivoxDecoder, Sdk1ForwardClockJumpIsAClockEventNotLoss) {
+  LivoxDecoder dec(*livox_model("AVIA"), LivoxDecoderOptions{});
+  Collected out;
+  const auto pts = points(2.0F);
+  const std::int64_t span = 96LL * 4167;
+  const std::int64_t host0 = 7'000'000'000;
+  auto send = [&](std::uint64_t ts, std::uint8_t type, std::int64_t host) {
+    Sdk1Header h;
+    h.timestamp = ts;
+    h.timestamp_type = type;
+    const auto bytes = encode_sdk1_points(h, pts);
+    dec.on_packet({bytes, host, 56001}, out.sinks());
+  };
+  // Free-running (type 0) from 12 s after power-on, packet 20 lost.
+  for (int k = 0; k < 100; ++k) {
+    if (k == 20) continue;
+    send(12'000'000'000ULL + static_cast<std::uint64_t>(k * span), 0, host0 + k * span);
+  }
+  // PTP locks: same timestamp type field in some firmware, epoch time 1.7e9 s from now on.
+  const std::uint64_t epoch = 1'700'000'000'000'000'000ULL;
+  for (int k = 100; k < 200; ++k) {
+    if (k == 150 || k == 151) continue;
+    send(epoch + static_cast<std::uint64_t>(k * span), 0, host0 + k * span);
+  }
+  // And the timestamp type changes (type 1, PTP) with a small step.
+  for (int k = 200; k < 220; ++k) {
+    send(epoch + static_cast<std::uint64_t>(k * span) + 5'000, 1, host0 + k * span);
+  }
+  dec.flush(out.sinks());
+  EXPECT_EQ(dec.counters().sequence_gaps, 3U);
+  EXPECT_EQ(dec.counters().clock_jumps, 2U);
+  EXPECT_EQ(dec.counters().late_points, 0U);
+  std::size_t total = 0;
+  for (const auto& s : out.scans) total += s.size();
+  EXPECT_EQ(total, 217U * 96U);
+}
+
+// A real outage: the receive times advance with the sensor times, so the missing packets are
+// counted (bounded by the elapsed time, not by the timestamps alone).
+TEST(LivoxDecoder, Sdk1OutageConsistentWithReceiveTimeIsCountedAsGaps) {
+  LivoxDecoder dec(*livox_model("MID-70"), LivoxDecoderOptions{});
+  Collected out;
+  std::array<LivoxPoint, 96> pts96 = points(2.0F);
+  const std::int64_t span = 96LL * 10'000;  // Mid-70 type 2: 96 points, 10 us apart
+  for (int k = 0; k < 3000; ++k) {
+    if (k >= 100 && k < 2700) continue;  // 2.5 s without data (cable pulled)
+    Sdk1Header h;
+    h.timestamp = static_cast<std::uint64_t>(k * span);
+    const auto bytes = encode_sdk1_points(h, pts96);
+    dec.on_packet({bytes, k * span + 300'000, 56001}, out.sinks());
+  }
+  EXPECT_EQ(dec.counters().sequence_gaps, 2600U);
+  EXPECT_EQ(dec.counters().clock_jumps, 0U);
 }
 
 TEST(LivoxDecoder, KnowsTheModelsAndTheirPorts) {

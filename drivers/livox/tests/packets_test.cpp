@@ -111,6 +111,57 @@ TEST(LivoxSdk1Packet, RejectsShortAndUnknownPackets) {
   EXPECT_EQ(decode_sdk1(std::span(b.data).first(5), 4167, 6, pkt), DecodeError::kTooShort);
 }
 
+// Issue 13, defect 1: a datagram that is not SDK1 (another sensor's traffic on the port) must
+// not decode into points. The constructed datagram is an extended-cartesian packet whose version
+// byte is 0xFF and which carries 100 trailing bytes: both disqualify it on their own.
+TEST(LivoxSdk1Packet, RejectsForeignVersionAndWrongLength) {
+  auto points_packet = [](int version, std::size_t trailing) {
+    Bytes b = sdk1_header(2, 0, 1'000'000'000ULL);
+    b.data[0] = static_cast<std::byte>(version);
+    for (int i = 0; i < 96; ++i)
+      b.put<std::int32_t>(1000).put<std::int32_t>(0).put<std::int32_t>(0).u8(1).u8(0);
+    b.data.insert(b.data.end(), trailing, std::byte{0x11});
+    return b.data;
+  };
+  LivoxPacket pkt;
+  ASSERT_EQ(decode_sdk1(points_packet(5, 0), 4167, 6, pkt), DecodeError::kNone);
+  EXPECT_EQ(decode_sdk1(points_packet(0xFF, 100), 4167, 6, pkt), DecodeError::kBadVersion);
+  EXPECT_EQ(decode_sdk1(points_packet(0xFF, 0), 4167, 6, pkt), DecodeError::kBadVersion);
+  EXPECT_EQ(decode_sdk1(points_packet(5, 100), 4167, 6, pkt), DecodeError::kLengthMismatch);
+  EXPECT_EQ(decode_sdk1(points_packet(5, 1), 4167, 6, pkt), DecodeError::kLengthMismatch);
+  // An IMU packet is exactly 42 bytes; one with padding is not SDK1.
+  Bytes imu = sdk1_header(6, 0, 0);
+  for (int i = 0; i < 6; ++i) imu.put<float>(0.0F);
+  ASSERT_EQ(decode_sdk1(imu.data, 4167, 6, pkt), DecodeError::kNone);
+  imu.u8(0);
+  EXPECT_EQ(decode_sdk1(imu.data, 4167, 6, pkt), DecodeError::kLengthMismatch);
+  // The reserved timestamp type 2 (and anything above 4) is not a valid SDK1 header either.
+  auto typed = points_packet(5, 0);
+  typed[8] = std::byte{2};
+  EXPECT_EQ(decode_sdk1(typed, 4167, 6, pkt), DecodeError::kBadTime);
+  typed[8] = std::byte{9};
+  EXPECT_EQ(decode_sdk1(typed, 4167, 6, pkt), DecodeError::kBadTime);
+}
+
+// A Velodyne data packet (1206 bytes, blocks flagged FF EE) on a Livox port: not SDK1, not SDK2.
+TEST(LivoxPackets, RejectVelodyneDataPackets) {
+  std::vector<std::byte> vlp(1206, std::byte{0});
+  for (std::size_t b = 0; b < 12; ++b) {
+    vlp[b * 100] = std::byte{0xFF};
+    vlp[b * 100 + 1] = std::byte{0xEE};
+    for (std::size_t c = 4; c < 100; c += 3) vlp[b * 100 + c] = std::byte{0x40};
+  }
+  vlp[1204] = std::byte{0x37};
+  vlp[1205] = std::byte{0xA1};
+  for (int type = 0; type < 9; ++type) {
+    vlp[9] = static_cast<std::byte>(type);  // whatever byte 9 says
+    LivoxPacket pkt;
+    EXPECT_EQ(decode_sdk1(vlp, 4167, 6, pkt), DecodeError::kBadVersion);
+  }
+  LivoxPacket pkt;
+  EXPECT_EQ(decode_sdk2(vlp, 4, pkt), DecodeError::kBadVersion);
+}
+
 Bytes sdk2_packet(int type, int dot_num, int interval, int point_bytes) {
   Bytes b;
   const int length = 36 + (type == 0 ? 24 : dot_num * point_bytes);
@@ -177,6 +228,19 @@ TEST(LivoxSdk2Packet, Cartesian16SphericalAndCheckedImuCrc) {
 TEST(LivoxSdk2Packet, RejectsInconsistentLengths) {
   Bytes b = sdk2_packet(1, 96, 4750, 14);
   LivoxPacket pkt;
+  {
+    Bytes full = sdk2_packet(1, 96, 4750, 14);
+    for (int i = 0; i < 96 * 14; ++i) full.u8(1);
+    ASSERT_EQ(decode_sdk2(full.data, 4, pkt), DecodeError::kNone);
+    full.u8(0);  // one byte more than the length field says
+    EXPECT_EQ(decode_sdk2(full.data, 4, pkt), DecodeError::kLengthMismatch);
+    full.data.pop_back();
+    full.data[0] = std::byte{5};  // an SDK1 version byte
+    EXPECT_EQ(decode_sdk2(full.data, 4, pkt), DecodeError::kBadVersion);
+    full.data[0] = std::byte{0};
+    full.data[5] = std::byte{95};  // dot_num 95 with 96 points' bytes
+    EXPECT_EQ(decode_sdk2(full.data, 4, pkt), DecodeError::kLengthMismatch);
+  }
   EXPECT_EQ(decode_sdk2(b.data, 4, pkt), DecodeError::kLengthMismatch);  // no point bytes
   Bytes many = sdk2_packet(1, 500, 4750, 14);
   many.data.resize(36 + 500 * 14);

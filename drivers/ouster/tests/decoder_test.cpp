@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -240,6 +241,50 @@ TEST_F(MovingSensor, MissingPacketsAndFramesAreCounted) {
   }
 }
 
+// Issue 13, defect 3: a capture that starts and ends mid-frame reported the missing columns of
+// its partial first and last frames as sequence gaps. They were never due: the scans are
+// incomplete, nothing is lost. A packet lost between them still is.
+TEST_F(MovingSensor, PartialFirstAndLastFramesAreNotLoss) {
+  const auto lidar = lidar_indices();
+  // Lidar packets 10 to 179 of 192: frames of 64, 54 + 64 + 52 captured.
+  auto cut = [&] {
+    std::vector<CapturedPacket> out;
+    for (std::size_t i = 0; i < packets_.size(); ++i) {
+      const bool is_lidar = packets_[i].payload.size() == format_.lidar_packet_size;
+      if (is_lidar && (i < lidar[10] || i > lidar[179])) continue;
+      out.push_back(packets_[i]);
+    }
+    return out;
+  };
+  {
+    OusterDecoder decoder(meta_);
+    const Collected c = run(decoder, cut());
+    ASSERT_EQ(c.scans.size(), 3U);
+    EXPECT_EQ(decoder.counters().incomplete_scans, 2U);  // the first and the last
+    EXPECT_EQ(decoder.counters().sequence_gaps, 0U);     // was 10 + 12
+    EXPECT_EQ(decoder.ouster_counters().missing_columns, 0U);
+  }
+  {
+    // Lost: the first frame's second captured packet, one in the middle frame and the third
+    // last captured packet (the two after it arrive).
+    std::vector<CapturedPacket> kept;
+    std::size_t n = 0;
+    for (const auto& p : cut()) {
+      if (p.payload.size() == format_.lidar_packet_size) {
+        const std::size_t k = n++;
+        if (k == 1 || k == 80 || k == 167) continue;
+      }
+      kept.push_back(p);
+    }
+    ASSERT_EQ(n, 170U);
+    OusterDecoder decoder(meta_);
+    const Collected c = run(decoder, kept);
+    ASSERT_EQ(c.scans.size(), 3U);
+    EXPECT_EQ(decoder.counters().sequence_gaps, 3U);
+    EXPECT_EQ(decoder.ouster_counters().missing_columns, 3U * 16U);
+  }
+}
+
 TEST_F(MovingSensor, LateAndDuplicatePacketsAreIgnored) {
   const auto lidar = lidar_indices();
   std::vector<CapturedPacket> noisy;
@@ -311,8 +356,9 @@ TEST(OusterScanAssembly, CrcCaptureEndsWithAPartialFrame) {
   ASSERT_EQ(c.scans.size(), 2U);
   EXPECT_EQ(c.scans_before_flush, 1U);
   EXPECT_EQ(decoder.counters().incomplete_scans, 1U);
-  EXPECT_EQ(decoder.ouster_counters().missing_columns, 512U - 32U);
-  EXPECT_EQ(decoder.counters().sequence_gaps, 30U);
+  // The capture stops two packets into frame 255: the rest was never due, nothing was lost.
+  EXPECT_EQ(decoder.ouster_counters().missing_columns, 0U);
+  EXPECT_EQ(decoder.counters().sequence_gaps, 0U);
   EXPECT_EQ(decoder.counters().decode_errors, 0U);
   EXPECT_EQ(c.imu.size(), 10U);
   const auto expected = returns_per_frame(packets, PacketFormat::from_metadata(m));
@@ -441,7 +487,9 @@ TEST(OusterScanAssembly, DuplicateIpIdentification) {
   EXPECT_EQ(decoder.counters().decode_errors, 0U);
   EXPECT_FALSE(decoder.metadata_init_id_mismatch());
   ASSERT_EQ(c.scans.size(), 1U);
-  EXPECT_EQ(decoder.ouster_counters().missing_columns, 1024U - 16U);
+  EXPECT_EQ(decoder.counters().incomplete_scans, 1U);
+  EXPECT_EQ(decoder.ouster_counters().missing_columns, 0U);  // one packet captured: none lost
+  EXPECT_EQ(decoder.counters().sequence_gaps, 0U);
 }
 
 TEST(OusterScanAssembly, EmptyCapture) {
@@ -454,6 +502,52 @@ TEST(OusterScanAssembly, EmptyCapture) {
   EXPECT_EQ(decoder.counters().packets, 0U);
   EXPECT_EQ(decoder.counters().scans, 0U);
   EXPECT_EQ(decoder.counters().incomplete_scans, 0U);
+}
+
+// Issue 13, defect 5: LEGACY firmware up to 2.0 writes a 16-bit reflectivity; the intensity of
+// the points (what `livod decode` writes to CSV/PCD) kept only its low 8 bits. A constructed
+// packet (a real FW 2.0 packet with one channel's reflectivity set to 786) and the real capture.
+TEST(OusterScanAssembly, LegacyReflectivityKeepsAllSixteenBits) {
+  const SensorMetadata m = meta("OS-2-32-U0_v2.0.0_1024x10.json");
+  const PacketFormat f = PacketFormat::from_metadata(m);
+  ASSERT_TRUE(f.legacy_lidar());
+  auto packets = capture("OS-2-32-U0_v2.0.0_1024x10.pcap");
+  std::size_t first = 0;
+  while (packets[first].payload.size() != f.lidar_packet_size) ++first;
+  // Column 3, row 5 of the first lidar packet: range 5123 mm, reflectivity 0x0312 = 786.
+  std::vector<CapturedPacket> one{packets[first]};
+  std::vector<std::byte>& b = one[0].payload;
+  const std::size_t column_bytes = 16 + 12 * f.pixels_per_column + 4;
+  const std::size_t pixel = 3 * column_bytes + 16 + 5 * 12;
+  b[pixel + 0] = std::byte{0x03};
+  b[pixel + 1] = std::byte{0x14};
+  b[pixel + 2] = std::byte{0x00};
+  b[pixel + 4] = std::byte{0x12};
+  b[pixel + 5] = std::byte{0x03};
+  for (std::size_t k = 0; k < 4; ++k) b[3 * column_bytes + column_bytes - 4 + k] = std::byte{0xFF};
+  OusterDecoder decoder(m);
+  const Collected c = run(decoder, one);
+  ASSERT_EQ(c.scans.size(), 1U);
+  bool found = false;
+  for (std::size_t i = 0; i < c.scans[0].size(); ++i) {
+    const double r = std::sqrt(static_cast<double>(c.scans[0].x[i]) * c.scans[0].x[i] +
+                               static_cast<double>(c.scans[0].y[i]) * c.scans[0].y[i] +
+                               static_cast<double>(c.scans[0].z[i]) * c.scans[0].z[i]);
+    if (c.scans[0].ring[i] == 5 && std::abs(r - 5.123) < 0.02) {
+      EXPECT_EQ(c.scans[0].intensity[i], 786.0F);  // was 786 mod 256 = 18
+      found = true;
+    }
+  }
+  EXPECT_TRUE(found);
+
+  // The real capture: FW 2.0 reflectivities above 255 come out whole.
+  OusterDecoder whole(m);
+  const Collected all = run(whole, packets);
+  float highest = 0.0F;
+  for (const auto& scan : all.scans) {
+    for (const float v : scan.intensity) highest = std::max(highest, v);
+  }
+  EXPECT_GT(highest, 255.0F);
 }
 
 TEST(OusterScanAssembly, FusaDualReturns) {

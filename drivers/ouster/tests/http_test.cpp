@@ -15,12 +15,16 @@
 #include <stdexcept>
 #include <thread>
 
-#include "drivers/ouster/http_client.hpp"
 #include "drivers/ouster/sensor_api.hpp"
+#include "io/http_client.hpp"
 #include "tests/support/data_dir.hpp"
 
 namespace livod::drivers::ouster {
 namespace {
+
+using io::http_get;
+using io::HttpGetOptions;
+using io::HttpResponse;
 
 std::string read_text(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);

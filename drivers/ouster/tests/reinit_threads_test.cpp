@@ -20,10 +20,10 @@
 #include <vector>
 
 #include "drivers/capture/live_source.hpp"
+#include "drivers/capture/pcap_pacer.hpp"
 #include "drivers/ouster/metadata.hpp"
 #include "drivers/ouster/ouster_decoder.hpp"
 #include "drivers/ouster/reinit.hpp"
-#include "drivers/capture/pcap_pacer.hpp"
 #include "io/pcap.hpp"
 #include "tests/support/data_dir.hpp"
 
@@ -32,6 +32,11 @@ namespace {
 
 using std::chrono::milliseconds;
 using std::chrono::steady_clock;
+using namespace capture;  // NOLINT(google-build-using-namespace): a test of the capture runtime
+using ouster::OusterFetchCounters;
+using ouster::OusterMetadataFetcher;
+using ouster::OusterMetadataFetcherConfig;
+using ouster::OusterReinitHandler;
 
 constexpr std::uint32_t kLoopback = 0x7F000001;
 constexpr const char* kCapture = "ouster/pcaps/OS-1-128_v2.3.0_1024x10_lb_n3.pcap";

@@ -11,6 +11,7 @@
 #include <map>
 #include <set>
 
+#include "drivers/imu/candump_frames.hpp"
 #include "drivers/imu/sbg_can.hpp"
 #include "drivers/livox/livox_decoder.hpp"
 #include "io/candump.hpp"
@@ -227,12 +228,10 @@ void check_bag_equals_outputs(const std::string& name, double duration, bool ima
     std::vector<std::int64_t> stamps;
     io::CanFrame frame;
     while (reader.next(frame)) {
-      imu::CanPayload payload{frame.id, frame.len, {}, frame.time_ns};
-      std::copy_n(frame.data.begin(), 8, payload.data.begin());
-      if (const auto s = decoder.on_frame(payload)) {
-        imu.push_back(s->imu);
-        stamps.push_back(clock.host_ns(s->imu.stamp.sensor.ns, s->imu.stamp.host.ns));
-      }
+      decoder.on_frame(imu::to_can_record(frame), [&](const ImuSample& s) {
+        imu.push_back(s);
+        stamps.push_back(clock.host_ns(s.stamp.sensor.ns, s.stamp.host.ns));
+      });
     }
     ASSERT_TRUE(topics.contains("/imu"));
     expected_topics.insert("/imu");

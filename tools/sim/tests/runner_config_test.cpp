@@ -63,7 +63,10 @@ void check_config(const Scenario& scenario) {
     const auto* s = config.find_sensor(scenario.can_imu->name);
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->driver, daemon::Driver::can_imu);
-    EXPECT_EQ(s->can.decoder, daemon::CanDecoder::sbg);
+    const bool sbg = scenario.can_imu->format == CanImuFormat::kSbg;
+    EXPECT_EQ(s->can.decoder, sbg ? daemon::CanDecoder::sbg : daemon::CanDecoder::bosch_mm7);
+    // The MM7 has no clock: mapped from the receive time minus the bus latency.
+    EXPECT_EQ(s->clock.mode, sbg ? daemon::ClockMode::automatic : daemon::ClockMode::receive_time);
     const auto* replay = std::get_if<daemon::ReplaySourceConfig>(&s->source);
     ASSERT_NE(replay, nullptr);
     EXPECT_EQ(replay->format, daemon::ReplayFormat::candump);
@@ -74,6 +77,8 @@ void check_config(const Scenario& scenario) {
     const auto* s = config.find_sensor(cam.name);
     ASSERT_NE(s, nullptr) << cam.name;
     const auto& k = cam.params.intrinsics;
+    // Written without images: the camera is there, disabled, so the folder replays as LIO.
+    EXPECT_FALSE(s->enabled);
     EXPECT_EQ(s->camera.width, k.width);
     EXPECT_EQ(s->camera.height, k.height);
     EXPECT_DOUBLE_EQ(s->camera.intrinsics[0], k.fx);
@@ -112,6 +117,11 @@ TEST(RunnerConfig, CanImuBodyConfigIsAccepted) {
     s.lidars[0].name = "avia";
   }
   ASSERT_FALSE(s.lidars[0].imu);
+  check_config(s);
+  // The same with a Bosch MM7 on the bus, and an Xsens on a serial line beside it (its capture is
+  // written, not configured: livod replay does not read serial captures yet).
+  s.can_imu->format = CanImuFormat::kBoschMm7;
+  s.serial_imu = SerialImuMount{};
   check_config(s);
 }
 

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 
+#include "drivers/imu/candump_frames.hpp"
 #include "drivers/imu/sbg_can.hpp"
 #include "drivers/livox/livox_decoder.hpp"
 #include "io/candump.hpp"
@@ -167,22 +168,20 @@ TEST(RunnerOutputs, CanImuLogHoldsTheImuModelWithinTheCanQuantisation) {
   double max_accel_error = 0.0;
   double max_gyro_error = 0.0;
   while (reader.next(frame)) {
-    imu::CanPayload payload{frame.id, frame.len, {}, frame.time_ns};
-    std::copy_n(frame.data.begin(), 8, payload.data.begin());
-    const auto sample = decoder.on_frame(payload);
+    std::optional<ImuSample> sample;
+    decoder.on_frame(imu::to_can_record(frame), [&](const ImuSample& s) { sample = s; });
     if (!sample) continue;
     ASSERT_LT(k, samples);
     const double t = static_cast<double>(k) * period;
     const ImuTruth m = model.measure(scene.imu_truth(t, mount.T_body_imu));
     // The device counter is whole microseconds of the (offset, skewed) device clock.
-    EXPECT_NEAR(clock.scenario_time(sample->imu.stamp.sensor.ns, sample->imu.stamp.host.ns), t,
-                1.01e-6)
+    EXPECT_NEAR(clock.scenario_time(sample->stamp.sensor.ns, sample->stamp.host.ns), t, 1.01e-6)
         << k;
-    EXPECT_GT(sample->imu.stamp.host.ns, kEpochNs + to_ns(t)) << "received before sent, " << k;
+    EXPECT_GT(sample->stamp.host.ns, kEpochNs + to_ns(t)) << "received before sent, " << k;
     max_accel_error =
-        std::max(max_accel_error, (sample->imu.accel_m_s2 - m.accel_m_s2).cwiseAbs().maxCoeff());
+        std::max(max_accel_error, (sample->accel_m_s2 - m.accel_m_s2).cwiseAbs().maxCoeff());
     max_gyro_error =
-        std::max(max_gyro_error, (sample->imu.gyro_rad_s - m.gyro_rad_s).cwiseAbs().maxCoeff());
+        std::max(max_gyro_error, (sample->gyro_rad_s - m.gyro_rad_s).cwiseAbs().maxCoeff());
     ++k;
   }
   EXPECT_EQ(k, samples);

@@ -19,7 +19,7 @@ namespace vel = drivers::velodyne;
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kGyroLsbRadS = vel::kHdlGyroDegPerSecPerLsb * kDegToRad;
-constexpr double kAccelLsbMS2 = vel::kHdlAccelGPerLsb * vel::kHdlStandardGravity;
+constexpr double kAccelLsbMS2 = vel::kHdlAccelGPerLsb * kStandardGravity;
 
 vel::PositionPacket decode(const std::vector<std::byte>& payload) {
   const auto r = vel::decode_position_packet(payload);
@@ -69,7 +69,7 @@ TEST(VelodynePositionEncoder, MotionWordsDecodeWithinHalfAnLsb) {
 // words of the two accelerometers that measure it, with the signs of the Velodyne frame.
 TEST(VelodynePositionEncoder, AxesLandOnTheDocumentedWords) {
   const std::array<double, 3> t{25.0, 25.0, 25.0};
-  const auto g = vel::kHdlStandardGravity;
+  const auto g = kStandardGravity;
   // +z (gravity on an upright sensor): accel x of sensors 1 and 2.
   auto w = encode_hdl32e_motion(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, g), t);
   EXPECT_EQ(w[2] & 0x0FFF, 819);

@@ -24,7 +24,7 @@ constexpr std::uint16_t kDataPort = 2368;
 constexpr std::uint16_t kPositionPort = 8308;
 // Half an LSB of the HDL-32E motion words, in SI (position_packet.hpp scale factors).
 constexpr double kHalfGyroLsbRadS = 0.5 * vel::kHdlGyroDegPerSecPerLsb * std::numbers::pi / 180.0;
-constexpr double kHalfAccelLsbMS2 = 0.5 * vel::kHdlAccelGPerLsb * vel::kHdlStandardGravity;
+constexpr double kHalfAccelLsbMS2 = 0.5 * vel::kHdlAccelGPerLsb * kStandardGravity;
 
 struct Capture {
   std::vector<SimDatagram> datagrams;

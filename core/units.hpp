@@ -1,0 +1,10 @@
+#pragma once
+// Physical constants used where sensors report in non-SI units (converted once, in the driver).
+
+namespace livod {
+
+// Standard gravity (m/s^2 per g): ISO 80000-3 / CGPM 1901. IMUs that report in g (Livox, Ouster
+// LEGACY, the HDL-32E) are converted with it, as their vendors' SDKs do.
+inline constexpr double kStandardGravity = 9.80665;
+
+}  // namespace livod

@@ -1,0 +1,50 @@
+#pragma once
+// Live camera and IMU sources built from a sensor's configuration: what `livod run` opens for
+// `driver: v4l2 | aravis | can_imu | serial_imu` with `source: {device: ...}`.
+//
+//   auto cam = devices::open_camera_source(sensor, config);      // throws naming sensor + device
+//   // scheduler loop:  cam->poll([&](const camera::CameraFrame& f) { ... f.mid_exposure ... });
+//   //   at 1 Hz:       camera::format_health(cam->update_health(host_now()))
+//   auto imu = devices::open_can_imu_source(sensor, config);
+//   // scheduler loop:  imu->poll([&](const ImuSample& s) { mapper.map_imu(copy of s); ... });
+//
+// Every source starts its capture thread in the constructor and stops it in stop() / the
+// destructor (drivers/camera/camera_source.hpp, drivers/imu/imu_source.hpp for the contracts).
+// Camera frames come out mapped onto the common timeline (the camera clock adds the sensor's
+// time_offset_s); IMU samples carry sensor and host time and are mapped by the caller's clock
+// domain (runtime::SensorClockMapper), in receive_time mode for IMUs without a sensor clock
+// (imu_clock_mode()).
+
+#include <memory>
+
+#include "core/clock_domain.hpp"
+#include "daemon/config/config.hpp"
+#include "drivers/camera/camera_source.hpp"
+#include "drivers/imu/imu_source.hpp"
+
+namespace livod::daemon::devices {
+
+// The camera clock for a sensor: clock.mode auto lets the frames' clock decide (V4L2 monotonic
+// stamps: direct; GenICam ticks: free-running; PTP: direct), other modes force it; latency,
+// window and skew bound as configured; time_offset_s and camera.readout_s applied.
+camera::CameraClockConfig camera_clock_config(const SensorConfig& sensor);
+
+// A v4l2 or aravis sensor with a device source. Throws livod::Error "sensor 'NAME': ..." when the
+// camera is missing or refuses the configuration (format, size, controls).
+std::unique_ptr<camera::CameraSource> open_camera_source(const SensorConfig& sensor,
+                                                         const LivodConfig& config);
+
+// A can_imu sensor with a device source (SocketCAN interface).
+std::unique_ptr<imu::CanImuSource> open_can_imu_source(const SensorConfig& sensor,
+                                                       const LivodConfig& config);
+
+// A serial_imu sensor with a device source (tty path or usb:VVVV:PPPP[:SERIAL]).
+std::unique_ptr<imu::SerialImuSource> open_serial_imu_source(const SensorConfig& sensor,
+                                                             const LivodConfig& config);
+
+// The clock mode an external IMU needs with clock.mode auto: free_running when its protocol
+// carries a sensor clock (SBG, Xsens), receive_time otherwise (Bosch MM7, custom CAN); the
+// configured mode when one is given.
+livod::ClockMode imu_clock_mode(const SensorConfig& sensor);
+
+}  // namespace livod::daemon::devices
