@@ -415,8 +415,8 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
         cfg << "    calibration: " << mount.name << ".csv\n";
       }
       // Livox sensors stream without scans: the decoder cuts them every period.
-      const std::string driver = lidar_driver(mount.model);
-      if ((driver == "livox_sdk1" || driver == "livox_sdk2") && mount.scan_rate_hz != 10.0) {
+      if ((family.driver == "livox_sdk1" || family.driver == "livox_sdk2") &&
+          mount.scan_rate_hz != 10.0) {
         cfg << "    frame_cut: {mode: time, period_s: " << 1.0 / mount.scan_rate_hz << "}\n";
       }
       // Only the models with an internal IMU take the key (of the Velodynes, the HDL-32E).
