@@ -3,27 +3,29 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <sstream>
+
+#include "drivers/lidar_family.hpp"
 
 namespace livod::daemon {
 namespace {
 
-// The model facts. One row per LiDAR model the daemon decodes and the simulator simulates; a model
-// without a row gets the generic defaults (a point budget, FAST-LIVO2's noise model) and
-// check-config says so. Hesai rows go here (model name as SensorConfig::model spells it).
-constexpr std::array<LidarModelFacts, 6> kLidarModelFacts{{
-    {"OS1-64", 64, 65536.0, 0.015, 0.13,
-     "Ouster OS1 datasheet: 1024 x 64 per 10 Hz scan, 1.5 cm at high SNR, 0.13 deg FWHM"},
-    {"OS1-128", 128, 131072.0, 0.015, 0.18,
-     "Ouster OS1 datasheet: 1024 x 128 per 10 Hz scan, 1.5 cm at high SNR, 0.18 deg FWHM"},
-    {"VLP-16", 16, 28800.0, 0.015, 0.17,
-     "Velodyne VLP-16: 16 x 1800 per 10 Hz revolution, +-3 cm typical, 3 mrad divergence"},
-    {"HDL-32E", 32, 69400.0, 0.01, 0.17,
-     "Velodyne HDL-32E: 32 x 2170 per 10 Hz revolution, < 2 cm, 3 mrad divergence"},
-    {"AVIA", 6, 24000.0, 0.02, 0.28,
-     "Livox Avia: 240 kpoints/s, 2 cm (20 m), 0.28 x 0.03 deg divergence"},
-    {"MID-360", 4, 20000.0, 0.02, 0.2,
-     "Livox Mid-360: 200 kpoints/s, 2 cm (10 m), divergence assumed 0.2 deg"},
+// The 1-sigma range noise and the divergence the estimator uses where the family tables
+// (drivers/<family>/<family>_family.cpp) have only an accuracy bound (Velodyne "+-3 cm typical")
+// or nothing (Ouster: "differ by hardware revision"). Everything else comes from the family row.
+struct NoiseFacts {
+  std::string_view model;
+  double range_sigma_m;
+  double divergence_deg;  // 0: take the family table's
+  std::string_view source;
+};
+constexpr std::array<NoiseFacts, 5> kNoiseFacts{{
+    {"OS1-64", 0.015, 0.13, "Ouster OS1 datasheet: 1.5 cm at high SNR, 0.13 deg FWHM"},
+    {"OS1-128", 0.015, 0.18, "Ouster OS1 datasheet: 1.5 cm at high SNR, 0.18 deg FWHM"},
+    {"VLP-16", 0.015, 0.17, "Velodyne VLP-16: +-3 cm typical (1.5 cm sigma), 3 mrad divergence"},
+    {"HDL-32E", 0.01, 0.17, "Velodyne HDL-32E: < 2 cm (1 cm sigma), 3 mrad divergence"},
+    {"MID-360", 0.02, 0.2, "Livox Mid-360: 2 cm (10 m), divergence assumed 0.2 deg"},
 }};
 
 std::string number(double v) {
@@ -35,10 +37,39 @@ std::string number(double v) {
 }  // namespace
 
 std::optional<LidarModelFacts> lidar_model_facts(std::string_view model) {
-  for (const auto& f : kLidarModelFacts) {
-    if (f.model == model) return f;
+  const auto match = drivers::find_model(model);
+  if (!match || match->model->points_per_second <= 0.0 || match->model->scan_rate_hz <= 0.0) {
+    return std::nullopt;
   }
-  return std::nullopt;
+  const drivers::LidarModelInfo& info = *match->model;
+  LidarModelFacts f;
+  f.model = std::string(info.name);
+  f.beams = info.beams;
+  f.scan_rate_hz = info.scan_rate_hz;
+  f.points_per_scan = info.points_per_second / info.scan_rate_hz;
+  f.source =
+      std::string(match->family->vendor) + " model table (" + std::string(info.summary) + ")";
+  const auto noise = std::find_if(kNoiseFacts.begin(), kNoiseFacts.end(),
+                                  [&](const NoiseFacts& n) { return n.model == info.name; });
+  if (noise != kNoiseFacts.end()) {
+    f.range_sigma_m = noise->range_sigma_m;
+    f.divergence_deg = noise->divergence_deg;
+    f.source = std::string(noise->source);
+  } else if (info.range_noise_m) {
+    f.range_sigma_m = *info.range_noise_m;
+  } else {
+    f.range_sigma_m = estimator::LioParams{}.dept_err;
+    f.source += "; no range noise in livod's sources: FAST-LIVO2's";
+  }
+  if (f.divergence_deg <= 0.0) {
+    if (info.beam_divergence_rad) {
+      f.divergence_deg = *info.beam_divergence_rad * 180.0 / std::numbers::pi;
+    } else {
+      f.divergence_deg = kAssumedDivergenceDeg;
+      f.divergence_assumed = true;
+    }
+  }
+  return f;
 }
 
 std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarModelFacts>& facts,
@@ -68,15 +99,15 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
          "points");
   if (!facts) {
     choose("lio.point_filter_num", lio.point_filter_num, 1,
-           name + " is not in the model table: every point, the point budget bounds the cost");
+           name + " has no model facts: every point, the point budget bounds the cost");
     choices.push_back({"lio.dept_err", number(lio.dept_err),
                        given.contains("lio.dept_err")
                            ? "set in the configuration"
-                           : name + " is not in the model table: FAST-LIVO2's range noise"});
+                           : name + " has no model facts: FAST-LIVO2's range noise"});
     choices.push_back({"lio.beam_err_deg", number(lio.beam_err_deg),
                        given.contains("lio.beam_err_deg")
                            ? "set in the configuration"
-                           : name + " is not in the model table: FAST-LIVO2's bearing noise"});
+                           : name + " has no model facts: FAST-LIVO2's bearing noise"});
     return choices;
   }
   // Undistortion and downsampling cost per raw point: keep every n-th point of each ring so that a
@@ -84,9 +115,9 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
   const int stride =
       std::max(1, static_cast<int>(std::lround(facts->points_per_scan / kRawPointsPerScan)));
   std::ostringstream why_stride;
-  why_stride << name << " brings " << facts->points_per_scan << " points per 10 Hz scan; every "
-             << stride << (stride == 1 ? "" : "th") << " point of each ring keeps about "
-             << std::lround(facts->points_per_scan / stride);
+  why_stride << name << " brings " << facts->points_per_scan << " points per "
+             << facts->scan_rate_hz << " Hz scan; every " << stride << (stride == 1 ? "" : "th")
+             << " point of each ring keeps about " << std::lround(facts->points_per_scan / stride);
   choose("lio.point_filter_num", lio.point_filter_num, stride, why_stride.str());
   // The noise model of the points: the datasheet's range noise, and a bearing noise of half the
   // beam divergence (the footprint's half width: where in it the echo comes from is unknown).
@@ -94,7 +125,10 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
          name + " range noise " + number(facts->range_sigma_m) + " m (" +
              std::string(facts->source) + ")");
   choose("lio.beam_err_deg", lio.beam_err_deg, std::max(0.05, 0.5 * facts->divergence_deg),
-         "half the beam divergence of " + number(facts->divergence_deg) + " deg");
+         "half the beam divergence of " + number(facts->divergence_deg) + " deg" +
+             (facts->divergence_assumed
+                  ? " (not in livod's sources for " + name + ": a spinning LiDAR's 3 mrad assumed)"
+                  : std::string()));
   return choices;
 }
 

@@ -5,10 +5,11 @@
 // on every model. A key the file sets is never touched. check-config prints each effective value
 // with its reason.
 //
-// One table of model facts lives in estimator_defaults.cpp (kLidarModelFacts) and one function
-// turns facts into parameters (estimator_settings_for). When the LiDAR families get their model
-// descriptor tables, lidar_model_facts() becomes a lookup into them; a new model (Hesai, ...)
-// needs one row with its datasheet figures and nothing else.
+// The model facts come from the LiDAR families' model tables (drivers/lidar_family.hpp: beams,
+// points per second, scan rate, datasheet range error and divergence), which every decoded model
+// has; a short table in estimator_defaults.cpp adds the 1-sigma range noise and divergence where a
+// family table has only an accuracy bound or nothing. One function turns facts into parameters
+// (estimator_settings_for). A new model gets its defaults from its family row.
 
 #include <optional>
 #include <set>
@@ -23,15 +24,22 @@ namespace livod::daemon {
 
 // What the estimator defaults need to know about a LiDAR model, from its datasheet.
 struct LidarModelFacts {
-  std::string_view model;        // canonical name (SensorConfig::model)
-  int beams = 0;                 // rings (Livox: lasers / lines)
-  double points_per_scan = 0.0;  // single return, default mode (10 Hz scans)
-  double range_sigma_m = 0.0;    // range noise, 1 sigma, of a strong return
-  double divergence_deg = 0.0;   // beam divergence (FWHM) of the wider axis
-  std::string_view source;       // where the figures come from
+  std::string model;                // canonical name (SensorConfig::model)
+  int beams = 0;                    // rings (Livox: lasers / lines)
+  double points_per_scan = 0.0;     // single return, default mode (default scan rate)
+  double scan_rate_hz = 10.0;       // the default scan rate points_per_scan refers to
+  double range_sigma_m = 0.0;       // range noise, 1 sigma, of a strong return
+  double divergence_deg = 0.0;      // beam divergence (FWHM) of the wider axis
+  bool divergence_assumed = false;  // no source gives it: kAssumedDivergenceDeg
+  std::string source;               // where the figures come from
 };
 
-// The facts of a model, or nullopt when the table has no row for it.
+// Beam divergence of a model whose sources give none: the Velodyne manuals' 3 mrad of a spinning
+// LiDAR's wider axis (VLS-128 manual table F-1).
+inline constexpr double kAssumedDivergenceDeg = 0.17;
+
+// The facts of a model (any family's canonical name or alias), or nullopt when no family table
+// knows it or its row has no point rate (Ouster's generic "OS": the metadata tells).
 std::optional<LidarModelFacts> lidar_model_facts(std::string_view model);
 
 // The estimator settings for a model (nullopt facts: a model the table does not know) with the

@@ -37,8 +37,11 @@ const EstimatorChoice* choice(const LivodConfig& c, const std::string& key) {
   return nullptr;
 }
 
-TEST(EstimatorDefaults, EveryModelInTheTableHasItsFacts) {
-  for (const char* model : {"OS1-64", "OS1-128", "VLP-16", "HDL-32E", "AVIA", "MID-360"}) {
+// Every model of every family table with a point rate has facts (Hesai, the other Velodynes and
+// Livox models included); Ouster's generic "OS" names no beam count, so it has none.
+TEST(EstimatorDefaults, EveryModelOfTheFamilyTablesHasItsFacts) {
+  for (const char* model : {"OS1-64", "OS1-128", "VLP-16", "HDL-32E", "AVIA", "MID-360",
+                            "PANDARXT32", "XT32", "PANDAR40P", "VLS-128", "OS0-32", "HAP"}) {
     const auto facts = lidar_model_facts(model);
     ASSERT_TRUE(facts) << model;
     EXPECT_GT(facts->beams, 0);
@@ -48,6 +51,31 @@ TEST(EstimatorDefaults, EveryModelInTheTableHasItsFacts) {
     EXPECT_FALSE(facts->source.empty());
   }
   EXPECT_FALSE(lidar_model_facts("NO-SUCH-LIDAR"));
+  EXPECT_FALSE(lidar_model_facts("OS"));
+}
+
+// The Hesai PandarXT-32 (640 k points/s): every 2nd point of each ring, its datasheet's 1 cm, and
+// a divergence its sources do not give, said so.
+TEST(EstimatorDefaults, HesaiGetsItsDefaultsFromItsFamilyTable) {
+  const auto facts = lidar_model_facts("PandarXT-32");
+  ASSERT_TRUE(facts);
+  EXPECT_EQ(facts->model, "PANDARXT32");
+  EXPECT_EQ(facts->beams, 32);
+  EXPECT_DOUBLE_EQ(facts->points_per_scan, 64000.0);
+  EXPECT_DOUBLE_EQ(facts->range_sigma_m, 0.01);
+  EXPECT_TRUE(facts->divergence_assumed);
+  estimator::EstimatorParams params;
+  const auto choices = estimator_settings_for(facts, "PANDARXT32", {}, params);
+  EXPECT_EQ(params.lio.point_filter_num, 2);
+  EXPECT_EQ(params.lio.point_budget, kDefaultPointBudget);
+  EXPECT_DOUBLE_EQ(params.lio.dept_err, 0.01);
+  EXPECT_DOUBLE_EQ(params.lio.beam_err_deg, 0.5 * kAssumedDivergenceDeg);
+  bool assumed = false;
+  for (const auto& c : choices) {
+    assumed = assumed || (c.key == "lio.beam_err_deg" &&
+                          c.reason.find("not in livod's sources") != std::string::npos);
+  }
+  EXPECT_TRUE(assumed);
 }
 
 // A 128-beam Ouster brings 131 k points per scan: every 4th point of each ring and the point
@@ -100,7 +128,7 @@ TEST(EstimatorDefaults, UnknownModelGetsTheBudgetAndSaysWhy) {
   EXPECT_DOUBLE_EQ(params.lio.dept_err, estimator::LioParams{}.dept_err);
   bool explained = false;
   for (const auto& c : choices) {
-    explained = explained || c.reason.find("XYZ-99 is not in the model table") != std::string::npos;
+    explained = explained || c.reason.find("XYZ-99 has no model facts") != std::string::npos;
   }
   EXPECT_TRUE(explained);
 }
