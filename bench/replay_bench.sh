@@ -11,7 +11,8 @@
 #                                              rate of RATES (default '10 20' Hz), SEEDS (default
 #                                              3) seeds each: per-frame p50 and p99 (wall and CPU)
 #                                              and ATE. BEFORE=/path/to/livod replays the same
-#                                              captures with another build too.
+#                                              captures with another build too; MODELS='VLP-16
+#                                              XT32' runs only those rows.
 #   bench/replay_bench.sh sweep BUILD_DIR SCENARIO SECONDS RATE 'SETTINGS'...
 #                                              one row per estimator setting (YAML flow mapping,
 #                                              '' = defaults) over SEEDS seeds: mean ATE, p99
@@ -77,9 +78,12 @@ stats() {
 # "points wall-p50 wall-p99 cpu-p99 ate"
 replay_one() {
   local bin=$1 sim=$2 settings=$3 out=$4
-  cp "$sim/config.yaml" "$out.yaml"
-  if [ -n "$settings" ]; then echo "estimator: $settings" >> "$out.yaml"; fi
-  "$bin" replay --config "$out.yaml" -o "$out" -q > /dev/null
+  # Beside config.yaml: its capture paths are relative to the file.
+  local yaml
+  yaml="$sim/$(basename "$out").yaml"
+  cp "$sim/config.yaml" "$yaml"
+  if [ -n "$settings" ]; then echo "estimator: $settings" >> "$yaml"; fi
+  "$bin" replay --config "$yaml" -o "$out" -q > /dev/null
   local ate
   ate=$("$livod" eval "$out/trajectory.txt" "$sim/groundtruth.txt" | awk '/^ATE/ {print $3}')
   echo "$(figures "$out") $ate"
@@ -96,6 +100,8 @@ case "$mode" in
     printf "%-8s %-24s %4s %8s %8s %8s %8s %10s  %s\n" model scenario Hz points p50 p99 \
       "p99-CPU" "ATE-mean" "(min-max, m)"
     while read -r model scenario seconds; do
+      # MODELS='VLP-16 XT32' runs only those rows.
+      if [ -n "${MODELS:-}" ] && [[ " $MODELS " != *" $model "* ]]; then continue; fi
       for rate in ${RATES:-10 20}; do
         for build in after before; do
           bin=$livod
@@ -105,8 +111,10 @@ case "$mode" in
           fi
           : > "$work/rows"
           for seed in $(seq "$seeds"); do
-            sim="$work/$scenario-$rate-$seed"
-            [ -d "$sim" ] || "$livod" sim --scenario "$scenario" --duration "$seconds" \
+            sim="$work/$(basename "$scenario" .yaml)-$rate-$seed"
+            # A name is a built-in scenario, a path a scenario file (bench/scenarios/).
+            if [ -f "$scenario" ]; then pick=(--scenario-file "$scenario"); else pick=(--scenario "$scenario"); fi
+            [ -d "$sim" ] || "$livod" sim "${pick[@]}" --duration "$seconds" \
               --seed "$seed" --scan-rate "$rate" --no-images -o "$sim" > /dev/null
             replay_one "$bin" "$sim" "" "$sim-$build" >> "$work/rows"
             rm -rf "$sim-$build"
@@ -117,7 +125,7 @@ case "$mode" in
             "$(median_of 3 "$seeds")" "$(median_of 4 "$seeds")" "$ate" "$lo" "$hi" \
             "$([ "$build" = before ] && echo "[before]")"
         done
-        rm -rf "$work/$scenario-$rate-"*
+        rm -rf "$work/$(basename "$scenario" .yaml)-$rate-"*
       done
     done <<'EOF'
 AVIA     room_handheld_avia      30
@@ -127,6 +135,7 @@ OS1-64   street_drone_os1_64     36
 OS1-128  street_vehicle_os1_128  36
 VLP-16   street_vehicle_vlp16    36
 HDL-32E  street_vehicle_hdl32e   36
+XT32     bench/scenarios/street_vehicle_xt32.yaml 36
 EOF
     ;;
   sweep)
