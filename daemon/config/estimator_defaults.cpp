@@ -28,6 +28,18 @@ constexpr std::array<NoiseFacts, 5> kNoiseFacts{{
     {"MID-360", 0.02, 0.2, "Livox Mid-360: 2 cm (10 m), divergence assumed 0.2 deg"},
 }};
 
+// "single", "2nd", "3rd", "4th", ...: "every single point", "every 2nd point".
+std::string ordinal(int n) {
+  if (n == 1) return "single";
+  const int tens = n % 100;
+  const char* suffix = (tens >= 11 && tens <= 13) ? "th"
+                       : n % 10 == 1              ? "st"
+                       : n % 10 == 2              ? "nd"
+                       : n % 10 == 3              ? "rd"
+                                                  : "th";
+  return std::to_string(n) + suffix;
+}
+
 std::string number(double v) {
   std::ostringstream os;
   os << v;
@@ -47,8 +59,8 @@ std::optional<LidarModelFacts> lidar_model_facts(std::string_view model) {
   f.beams = info.beams;
   f.scan_rate_hz = info.scan_rate_hz;
   f.points_per_scan = info.points_per_second / info.scan_rate_hz;
-  f.source =
-      std::string(match->family->vendor) + " model table (" + std::string(info.summary) + ")";
+  f.source = std::string(match->family->vendor) + " datasheet, livod's " +
+             std::string(match->family->driver) + " model table";
   const auto noise = std::find_if(kNoiseFacts.begin(), kNoiseFacts.end(),
                                   [&](const NoiseFacts& n) { return n.model == info.name; });
   if (noise != kNoiseFacts.end()) {
@@ -116,7 +128,7 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
       std::max(1, static_cast<int>(std::lround(facts->points_per_scan / kRawPointsPerScan)));
   std::ostringstream why_stride;
   why_stride << name << " brings " << facts->points_per_scan << " points per "
-             << facts->scan_rate_hz << " Hz scan; every " << stride << (stride == 1 ? "" : "th")
+             << facts->scan_rate_hz << " Hz scan; every " << ordinal(stride)
              << " point of each ring keeps about " << std::lround(facts->points_per_scan / stride);
   choose("lio.point_filter_num", lio.point_filter_num, stride, why_stride.str());
   // The noise model of the points: the datasheet's range noise, and a bearing noise of half the
