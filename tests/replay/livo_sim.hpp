@@ -82,6 +82,8 @@ inline sim::World world_of(const sim::Scenario& s) {
       return sim::make_room_world(1);
     case sim::WorldKind::kCorridor:
       return sim::make_corridor_world();
+    case sim::WorldKind::kCorridorSideRooms:
+      return sim::make_corridor_side_rooms_world();
     case sim::WorldKind::kStreet:
       return sim::make_street_world(1, s.street_length_m);
   }
