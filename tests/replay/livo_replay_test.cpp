@@ -69,12 +69,6 @@ constexpr const char* kCamera =
     "      rotation: {matrix: [0, 0, 1, -1, 0, 0, 0, -1, 0]}\n";
 
 // The simulator's bag as dataset_* sensors (header stamps on the host clock: direct mapping).
-// These tests compare containers (bag, folders), not the estimator's point selection: every
-// point of each ring and a fixed downsampling cell. The per-model defaults select every n-th point
-// per ring (a PointCloud2 without rings selects differently) and adapt the cell to a point budget
-// (a stamp 0.1 ms off can switch one scan's cell): millimetres that say nothing about containers.
-constexpr const char* kFixedPoints = "estimator: {lio: {point_budget: 0, point_filter_num: 1}}\n";
-
 void write_bag_config(const std::filesystem::path& path, const std::string& bag,
                       const std::string& image_topic) {
   std::ofstream out(path);
@@ -88,7 +82,7 @@ void write_bag_config(const std::filesystem::path& path, const std::string& bag,
       << "    source: {replay: {file: " << bag << ", topic: /os_cloud_node/imu}}\n"
       << "  - name: cam0\n    driver: dataset_camera\n"
       << "    source: {replay: {file: " << bag << ", topic: " << image_topic << "}}\n"
-      << kCamera << kFixedPoints;
+      << kCamera;
 }
 
 class LivoReplay : public ::testing::Test {
@@ -101,7 +95,6 @@ class LivoReplay : public ::testing::Test {
     options.write_images = true;
     options.write_bag = true;
     sim::run_scenario(sim::make_scenario("room_handheld_os1_64"), options);
-    std::ofstream(*folder_ / "config.yaml", std::ios::app) << kFixedPoints;
     debug_dir_ = new std::filesystem::path(test::temp_dir("livo-replay-debug"));
     daemon::replay::ReplayOptions ro;
     ro.out_dir = test::temp_dir("livo-replay-folder");

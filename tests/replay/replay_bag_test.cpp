@@ -101,15 +101,6 @@ std::string yaml_extrinsic(const Eigen::Isometry3d& T) {
 }
 
 // dataset_lidar + dataset_imu reading `bag`; `clock` empty = the default (auto: direct).
-// These tests compare containers (bag vs pcap), not the estimator: a fixed downsampling cell.
-// With the adaptive point budget a 0.1 mm difference in a stamp can switch the cell of one scan
-// and the trajectories then differ by millimetres for reasons that have nothing to do with the
-// container.
-void append_fixed_cell(const std::filesystem::path& config) {
-  std::ofstream out(config, std::ios::app);
-  out << "estimator: {lio: {point_budget: 0}}\n";
-}
-
 void write_bag_config(const std::filesystem::path& path, const std::string& bag,
                       const std::string& lidar_topic, const Eigen::Isometry3d& T_body_lidar,
                       const std::string& clock) {
@@ -122,8 +113,6 @@ void write_bag_config(const std::filesystem::path& path, const std::string& bag,
       << clock_line << yaml_extrinsic(T_body_lidar) << "  - name: imu\n    driver: dataset_imu\n"
       << "    source: {replay: {file: " << bag << ", topic: /livox/imu}}\n"
       << clock_line;
-  out.close();
-  append_fixed_cell(path);
 }
 
 struct Pose {
@@ -184,7 +173,6 @@ class ReplayBag : public ::testing::Test {
     options.write_images = false;
     options.write_bag = true;
     sim::run_scenario(*scenario_, options);
-    append_fixed_cell(*folder_ / "config.yaml");
     pcap_ = new daemon::replay::ReplayResult(
         test::replay(*folder_ / "config.yaml", test::temp_dir("bag-pcap")));
   }
