@@ -248,7 +248,7 @@ std::vector<std::string> Publisher::stop() {
       errors_.push_back(e.what());
     }
   }
-  if (map_) {
+  if (map_ && !options_.map_pcd.empty()) {  // the map also exists for map saves alone
     try {
       replay::write_pcd(options_.map_pcd, map_->xyz());
     } catch (const std::exception& e) {
