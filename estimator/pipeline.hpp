@@ -28,7 +28,6 @@
 #include "estimator/imu/initializer.hpp"
 #include "estimator/imu/undistortion.hpp"
 #include "estimator/lio/downsample.hpp"
-#include "estimator/lio/point_budget.hpp"
 #include "estimator/lio/point_to_plane.hpp"
 #include "estimator/lio/spatial_order.hpp"
 #include "estimator/map/voxel_map.hpp"
@@ -77,8 +76,7 @@ struct FrameReport {
   std::uint32_t scan_sequence = 0;
   int lidar = 0;  // the LiDAR whose scan end is t (several LiDARs; 0 otherwise)
   int raw_points = 0;
-  int used_points = 0;             // after blind/point_filter_num and downsampling
-  double downsample_cell_m = 0.0;  // the voxel-grid cell used (adapts with lio.point_budget)
+  int used_points = 0;  // after blind/point_filter_num and downsampling
   int matched = 0;
   int iterations = 0;
   bool converged = false;
@@ -203,8 +201,6 @@ class LioPipeline {
   std::unique_ptr<VoxelMap> map_;
   std::unique_ptr<PointToPlane> p2p_;
   VoxelGridDownsampler downsampler_;
-  std::optional<PointBudget> point_budget_;
-  std::vector<Eigen::Vector3d> downsampled_;
   SpatialOrder spatial_order_;
   Belief belief_;
   MappedTime state_time_;

@@ -45,9 +45,7 @@ struct TimedPoint {
 };
 
 TEST(RunnerOutputs, PcapDecodesToTheSimulatedPoints) {
-  // Without moving people and potted plants: the test re-simulates the static room world.
-  Scenario scenario = make_scenario("room_handheld_avia");
-  scenario.scene = SceneContent{};
+  const Scenario scenario = make_scenario("room_handheld_avia");
   const SimRunOptions o = options_for("runner_pcap", 5, 1.5);
   run_scenario(scenario, o);
 
@@ -195,9 +193,7 @@ TEST(RunnerOutputs, CanImuLogHoldsTheImuModelWithinTheCanQuantisation) {
 }
 
 TEST(RunnerOutputs, CameraFolderIsEurocWithExposureAndTheRenderedImages) {
-  // Without moving people and potted plants: the test re-simulates the static room world.
-  Scenario scenario = make_scenario("room_handheld_avia");
-  scenario.scene = SceneContent{};
+  const Scenario scenario = make_scenario("room_handheld_avia");
   SimRunOptions o = options_for("runner_camera", 4, 0.3);
   o.write_images = true;
   run_scenario(scenario, o);
