@@ -221,11 +221,8 @@ TEST_F(ReplayBag, SimulatorBagGivesTheTrajectoryOfItsPcap) {
   // The bag's stamps are the exact host times; the pcap's are mapped by the clock domain, which
   // sits on the link's minimum delay (~80 us).
   EXPECT_LT(c.max_dt_us, 200.0);
-  // A few millimetres, not exact: the bag's stamps and the pcap's differ by the link delay
-  // (~80 us), and the voxel grid keeps the measured point nearest to each cell's centroid - a
-  // discrete choice that a slightly different undistortion can flip (docs/estimator.md).
-  EXPECT_LT(c.max_dp_m, 5e-3);
-  EXPECT_LT(c.max_dr_deg, 0.05);
+  EXPECT_LT(c.max_dp_m, 1e-3);
+  EXPECT_LT(c.max_dr_deg, 0.02);
 }
 
 TEST_F(ReplayBag, SensorClockStampsCustomMsgAndPointCloud2) {
@@ -245,9 +242,8 @@ TEST_F(ReplayBag, SensorClockStampsCustomMsgAndPointCloud2) {
     // each fitted to its own receive stamps (the LiDAR's: record times, up to a packet late).
     EXPECT_EQ(r->summary.sensors.front().clock.mode, "free_running");
     EXPECT_LT(c.max_dt_us, 300.0);
-    // As above: the nearest-point voxel grid turns stamp differences into millimetres.
-    EXPECT_LT(c.max_dp_m, 5e-3);
-    EXPECT_LT(c.max_dr_deg, 0.05);
+    EXPECT_LT(c.max_dp_m, 1e-3);
+    EXPECT_LT(c.max_dr_deg, 0.02);
   }
   // CustomMsg and PointCloud2 carry the same scans: identical replays.
   EXPECT_TRUE(test::read_file(livox.trajectory) == test::read_file(cloud.trajectory));
