@@ -365,18 +365,22 @@ void Scheduler::run_update() {
   update_wall_s_ = seconds_since(t0);
 }
 
+void Scheduler::finish_update() {
+  release_held();
+  stats_.estimator_s += update_wall_s_;
+  if (update_out_) {
+    const auto o0 = Clock::now();
+    emit_frame(*update_out_, update_rx_ns_, update_cpu_s_);
+    stats_.output_s += seconds_since(o0);
+  }
+}
+
 std::size_t Scheduler::process_on_update_thread() {
   std::size_t done = 0;
   if (update_thread_->busy()) {
     if (!update_thread_->done()) return 0;
     update_thread_->collect();
-    release_held();
-    stats_.estimator_s += update_wall_s_;
-    if (update_out_) {
-      const auto o0 = Clock::now();
-      emit_frame(*update_out_, update_rx_ns_, update_cpu_s_);
-      stats_.output_s += seconds_since(o0);
-    }
+    finish_update();
     ++done;
   }
   if (pipeline_->take_group()) {
@@ -394,9 +398,7 @@ std::size_t Scheduler::process(std::size_t max_groups) {
     // Draining at the end: the running update first, then everything on this thread.
     if (update_thread_->busy()) {
       update_thread_->wait_and_collect();
-      release_held();
-      stats_.estimator_s += update_wall_s_;
-      if (update_out_) emit_frame(*update_out_, update_rx_ns_, update_cpu_s_);
+      finish_update();
     }
   }
   std::size_t done = 0;

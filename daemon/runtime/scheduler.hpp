@@ -203,6 +203,8 @@ class Scheduler {
   std::size_t process_on_update_thread();
   // The update thread's job: the taken group through the pipeline.
   void run_update();
+  // After a collected update: hands over the held measurements, publishes its frame.
+  void finish_update();
   // Publishes a finished frame (scheduler thread).
   void emit_frame(const estimator::PipelineOutput& out, std::int64_t rx_ns, double cpu_s);
   // Hands what arrived during an update to the estimator, in arrival order.

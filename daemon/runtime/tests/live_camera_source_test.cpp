@@ -12,6 +12,7 @@
 #include "core/image.hpp"
 #include "daemon/config/load_config.hpp"
 #include "daemon/runtime/live_camera_source.hpp"
+#include "daemon/runtime/tests/live_source_test_support.hpp"
 #include "drivers/camera/aravis_camera.hpp"
 
 namespace livod::daemon::runtime {
@@ -19,36 +20,10 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kLidar = R"(  - {name: vlp, driver: velodyne, model: VLP-16, source: {udp: {}},
-     extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}}
-)";
-const std::string kExtrinsic =
-    "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n";
-
-// `livod run` takes these configurations: check-config finds no error in them.
-LivodConfig load_runnable(const std::string& yaml) {
-  auto r = load_config_from_string(yaml, "test.yaml");
-  for (const auto& p : r.problems) {
-    EXPECT_NE(p.severity, Severity::error) << format_problem(r.source, p);
-  }
-  return r.config;
-}
-
-// Drains a source like the scheduler does: peek, deliver, until `done` or 10 s.
-template <class Done>
-bool drain(MeasurementSource& source, const drivers::DecoderSinks& sinks, Done&& done,
-           std::vector<std::int64_t>* peeked = nullptr) {
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (!done() && std::chrono::steady_clock::now() < deadline) {
-    if (const auto t = source.peek_time()) {
-      if (peeked != nullptr) peeked->push_back(*t);
-      source.deliver(sinks);
-    } else {
-      std::this_thread::sleep_for(2ms);
-    }
-  }
-  return done();
-}
+using test_support::drain;
+using test_support::kExtrinsic;
+using test_support::kLidar;
+using test_support::load_runnable;
 
 TEST(LiveCameraSource, ACameraDeliversMappedFramesAtMidExposureInReceiveOrder) {
   camera::AravisCamera::enable_fake_interface();
