@@ -71,6 +71,11 @@ struct MapParams {
   bool sliding = true;
   double half_extent_m = 50.0;     // voxels farther than this from the robot (per axis) go
   double slide_threshold_m = 8.0;  // re-centre after moving this far
+  // A hard budget of root voxels: over it, the voxels farthest from the robot go (down to 90 %),
+  // sliding or not. The box alone does not bound memory: a diverging estimate fills its volume
+  // with scans in every orientation (a simulated room grew by 1 GB/min). About 1.7 KB per voxel
+  // on a street (docs/estimator.md): the default is ~0.5 GB, ten times a street drive's map.
+  std::size_t max_voxels = 300000;
 };
 
 struct VioParams {

@@ -177,7 +177,7 @@ std::size_t LioPipeline::process(const std::function<void(const PipelineOutput&)
                                  std::size_t max_groups) {
   std::size_t done = 0;
   while (done < max_groups && take_group()) {
-    process_taken(on_output);
+    process_taken(on_output, {});
     ++done;
   }
   return done;
@@ -187,8 +187,9 @@ bool LioPipeline::take_group() {
   return sync_.next(group_);
 }
 
-void LioPipeline::process_taken(const std::function<void(const PipelineOutput&)>& on_output) {
-  process_group(group_, on_output);
+void LioPipeline::process_taken(const std::function<void(const PipelineOutput&)>& on_output,
+                                const EstimateCallback& on_estimate) {
+  process_group(group_, on_output, on_estimate);
 }
 
 void LioPipeline::propagate_to(const MeasurementGroup& group, ImuPoseTrack& track) {
@@ -317,7 +318,8 @@ void LioPipeline::prepare_points(const LidarScan& scan, std::size_t lidar, Mappe
 }
 
 void LioPipeline::process_group(const MeasurementGroup& group,
-                                const std::function<void(const PipelineOutput&)>& on_output) {
+                                const std::function<void(const PipelineOutput&)>& on_output,
+                                const EstimateCallback& on_estimate) {
   const auto t_total = std::chrono::steady_clock::now();
   const auto& lio = options_.params.lio;
   FrameReport report;
@@ -386,6 +388,14 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   if (!report.updated) ++counters_.frames_without_update;
   report.timings.update_ms = ms_since(t0) - linearize_ms;
   report.timings.residuals_ms = residuals_ms + linearize_ms;
+  const bool visual = group.kind == MeasurementGroup::Kind::image && vio_;
+  const auto estimate_final = [&] {
+    if (on_estimate) {
+      on_estimate(
+          FilterEstimate{group.t_update, belief_.x, belief_.P, report.updated, report.degeneracy});
+    }
+  };
+  if (!visual) estimate_final();
 
   // Map insertion with world covariances (point + pose uncertainty, FAST-LIVO2 1.3).
   t0 = std::chrono::steady_clock::now();
@@ -420,10 +430,11 @@ void LioPipeline::process_group(const MeasurementGroup& group,
 
   colors_.clear();
   colored_.clear();
-  if (group.kind == MeasurementGroup::Kind::image && vio_) {
+  if (visual) {
     t0 = std::chrono::steady_clock::now();
     visual_update(group, matched, report);
     report.timings.vio_ms = ms_since(t0);
+    estimate_final();
   }
   // A full map traversal costs as much as a large part of the frame on a big (street) map:
   // refreshed every kMapStatsPeriod frames, reported from the last refresh in between.

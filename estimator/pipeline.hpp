@@ -111,6 +111,19 @@ struct PipelineOutput {
   cv::Mat vio_grey;
 };
 
+// A group's estimate as soon as it is final, before the rest of the frame's work: after the LIO
+// update of a LiDAR group (the map insertion that follows does not change it), after the visual
+// update of an image group. The daemon publishes the pose from it, so that a pose does not wait
+// for the map insertion (half of a frame). Valid during the callback only.
+struct FilterEstimate {
+  MappedTime t;
+  const State& x;
+  const StateMatrix& P;
+  bool updated = false;  // as FrameReport::updated
+  DegeneracyReport degeneracy;
+};
+using EstimateCallback = std::function<void(const FilterEstimate&)>;
+
 struct PipelineCounters {
   std::uint64_t scans_in = 0;
   std::uint64_t scans_processed = 0;
@@ -158,8 +171,11 @@ class LioPipeline {
   // (cheap) and process_taken() runs it. Between take_group() returning true and the end of
   // process_taken() the caller makes no other call: the update owns the whole pipeline.
   // process(f, n) is exactly n rounds of both.
+  // `on_estimate` (may be empty) is called once per group, before `on_output`, as soon as the
+  // estimate is final (FilterEstimate).
   bool take_group();
-  void process_taken(const std::function<void(const PipelineOutput&)>& on_output);
+  void process_taken(const std::function<void(const PipelineOutput&)>& on_output,
+                     const EstimateCallback& on_estimate = {});
   // Scans queued for the estimator (waiting for IMU data or for their turn).
   [[nodiscard]] std::size_t queued_scans() const { return sync_.queued_scans(); }
   [[nodiscard]] std::size_t queued_imu() const { return sync_.queued_imu(); }
@@ -180,7 +196,8 @@ class LioPipeline {
 
  private:
   void process_group(const MeasurementGroup& group,
-                     const std::function<void(const PipelineOutput&)>& on_output);
+                     const std::function<void(const PipelineOutput&)>& on_output,
+                     const EstimateCallback& on_estimate);
   // Propagates the belief through the group's IMU samples to its update time, recording the IMU
   // poses along the way (for undistortion).
   void propagate_to(const MeasurementGroup& group, ImuPoseTrack& track);

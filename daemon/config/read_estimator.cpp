@@ -89,6 +89,10 @@ void read_map(MapReader& m, estimator::MapParams& map) {
   m.read("sliding", map.sliding);
   m.read("half_extent_m", map.half_extent_m, closed(1.0, 10000.0));
   m.read("slide_threshold_m", map.slide_threshold_m, left_open(0.0, 10000.0));
+  int max_voxels = static_cast<int>(map.max_voxels);
+  if (m.read("max_voxels", max_voxels, 1000, 100000000)) {
+    map.max_voxels = static_cast<std::size_t>(max_voxels);
+  }
   if (map.slide_threshold_m >= map.half_extent_m) {
     m.problems().error(ProblemKind::inconsistent, m.child_path("slide_threshold_m"),
                        m.key_at("slide_threshold_m"),

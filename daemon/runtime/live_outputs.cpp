@@ -31,6 +31,7 @@ ImuSample sample_of(const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
 
 PublisherChannels::PublisherChannels(const Sizes& sizes)
     : frames(sizes.frames, [&](FrameRecord& r) { r.xyz_world.reserve(3 * sizes.cloud_points); }),
+      estimates(sizes.estimates),
       imu_poses(sizes.imu_poses),
       health(sizes.health),
       cloud_points(sizes.cloud_points) {}
@@ -38,13 +39,39 @@ PublisherChannels::PublisherChannels(const Sizes& sizes)
 LiveOutputs::LiveOutputs(PublisherChannels& channels, const LiveOutputsOptions& options)
     : channels_(channels), options_(options), started_(host_now()) {}
 
+namespace {
+
+PoseStatus frame_status(std::uint64_t index, bool updated, bool degenerate) {
+  // The first frame seeds the map (nothing to update against): its pose is the initialisation's.
+  return index == 0   ? PoseStatus::kOk
+         : !updated   ? PoseStatus::kImuOnly
+         : degenerate ? PoseStatus::kDegenerate
+                      : PoseStatus::kOk;
+}
+
+}  // namespace
+
+void LiveOutputs::on_estimate(const EstimateOutput& estimate) {
+  const auto& e = estimate.estimate;
+  status_ = frame_status(estimate.index, e.updated, e.degeneracy.degenerate);
+  last_filter_t_ = e.t;
+  estimate_published_ = false;
+  ImuPoseRecord* r = channels_.estimates.acquire();
+  if (r == nullptr) return;  // counted; on_frame publishes the pose instead
+  const ImuSample imu = sample_of(estimate.gyro_rad_s, estimate.accel_m_s2);
+  r->pose = publish::pose_record_from_state(e.x, e.P, e.t, PoseSource::kFilter, status_, e.t, &imu);
+  r->rx_ns = estimate.completed_rx_ns;
+  last_pose_ = r->pose;
+  channels_.estimates.publish(r);
+  channels_.doorbell.ring();
+  estimate_published_ = true;
+}
+
 void LiveOutputs::on_frame(const FrameOutput& frame) {
   const auto& o = frame.estimate;
-  // The first frame seeds the map (nothing to update against): its pose is the initialisation's.
-  status_ = frame.index == 0                 ? PoseStatus::kOk
-            : !o.report.updated              ? PoseStatus::kImuOnly
-            : o.report.degeneracy.degenerate ? PoseStatus::kDegenerate
-                                             : PoseStatus::kOk;
+  status_ = frame_status(frame.index, o.report.updated, o.report.degeneracy.degenerate);
+  const bool pose_published = frame.estimate_sent && estimate_published_;
+  estimate_published_ = false;
   last_degeneracy_ratio_ = o.report.degeneracy.translation_ratio;
   last_map_ = o.report.map;
   last_filter_t_ = o.t;
@@ -60,6 +87,7 @@ void LiveOutputs::on_frame(const FrameOutput& frame) {
   r->report = o.report;
   r->cpu_ms = frame.cpu_ms;
   r->registered_points = o.registered_world.size();
+  r->pose_published = pose_published;
   r->xyz_world.clear();
   if (channels_.cloud_points > 0 && !o.registered_world.empty()) {
     // Evenly decimated to the record's capacity (the registered scan is spatially ordered, so a
@@ -92,7 +120,8 @@ void LiveOutputs::on_imu_pose(const ImuPoseOutput& pose) {
 }
 
 std::uint64_t LiveOutputs::dropped() const {
-  return channels_.frames.dropped() + channels_.imu_poses.dropped() + channels_.health.dropped();
+  return channels_.frames.dropped() + channels_.estimates.dropped() +
+         channels_.imu_poses.dropped() + channels_.health.dropped();
 }
 
 void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {

@@ -31,12 +31,15 @@ struct PublisherChannels {
   struct Sizes {
     std::size_t frames = 8;
     std::size_t imu_poses = 512;
+    std::size_t estimates = 8;
     std::size_t health = 4;
     std::size_t cloud_points = 0;  // registered-scan capacity per frame record; 0: not copied
   };
   explicit PublisherChannels(const Sizes& sizes);
 
   RecordChannel<FrameRecord> frames;
+  // Filter poses published before their frame's record (OutputSink::on_estimate).
+  RecordChannel<ImuPoseRecord> estimates;
   RecordChannel<ImuPoseRecord> imu_poses;
   RecordChannel<HealthRecord> health;
   drivers::capture::Doorbell doorbell;  // rung by the producer after each publish
@@ -57,6 +60,7 @@ class LiveOutputs final : public OutputSink {
   LiveOutputs(PublisherChannels& channels, const LiveOutputsOptions& options);
 
   void on_frame(const FrameOutput& frame) override;
+  void on_estimate(const EstimateOutput& estimate) override;
   void on_imu_pose(const ImuPoseOutput& pose) override;
   [[nodiscard]] bool wants_imu_poses() const override { return options_.imu_poses; }
 
@@ -82,6 +86,7 @@ class LiveOutputs final : public OutputSink {
   std::array<float, 1024> frame_ms_{};  // frame times since the previous health snapshot
   std::size_t frame_ms_count_ = 0;
   PoseStatus status_ = PoseStatus::kInitialising;
+  bool estimate_published_ = false;  // the current frame's pose went out from on_estimate()
   double last_degeneracy_ratio_ = 0.0;
   estimator::VoxelMapStats last_map_;
   std::vector<SensorRates> rates_;

@@ -27,6 +27,20 @@ struct FrameOutput {
   // angular rate and acceleration published with the pose.
   Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();
+  // on_estimate() was called for this frame before (the daemon's update thread): its pose went
+  // out then.
+  bool estimate_sent = false;
+};
+
+// A frame's estimate as soon as the update ended (estimator::FilterEstimate), before the frame's
+// remaining work (map insertion): the daemon publishes the pose from it. Same index, receive time
+// and IMU reading as the FrameOutput that follows.
+struct EstimateOutput {
+  const estimator::FilterEstimate& estimate;
+  std::uint64_t index = 0;
+  std::int64_t completed_rx_ns = 0;
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();
 };
 
 struct ImuPoseOutput {
@@ -39,6 +53,9 @@ class OutputSink {
  public:
   virtual ~OutputSink() = default;
   virtual void on_frame(const FrameOutput& frame) = 0;
+  // Before on_frame() of the same frame, when the scheduler runs updates on the update thread.
+  // Default: nothing (on_frame has everything).
+  virtual void on_estimate(const EstimateOutput& /*estimate*/) {}
   // One per body-IMU sample once the filter runs (IMU-rate pose). Default: not wanted.
   virtual void on_imu_pose(const ImuPoseOutput& /*pose*/) {}
   // Whether on_imu_pose is wanted at all (the scheduler then skips the propagation).

@@ -95,8 +95,25 @@ bool Publisher::publish_imu_poses() {
   return any;
 }
 
+bool Publisher::publish_estimates() {
+  bool any = false;
+  while (ImuPoseRecord* p = channels_.estimates.next()) {
+    any = true;
+    if (bus_ != nullptr) {
+      bus_->publish_pose(p->pose);
+      const double ms = ms_between(p->rx_ns, host_now().ns);
+      stats_.pose_latency_ms.add(ms);
+      window_pose_latency_.add(ms);
+    }
+    channels_.estimates.release(p);
+  }
+  return any;
+}
+
 bool Publisher::drain() {
-  bool any = publish_imu_poses();
+  // Filter poses first: IMU-rate poses queued meanwhile were propagated from them.
+  bool any = publish_estimates();
+  any = publish_imu_poses() || any;
   while (FrameRecord* f = channels_.frames.next()) {
     any = true;
     on_frame(*f);
@@ -117,10 +134,12 @@ void Publisher::on_frame(FrameRecord& f) {
     return;
   }
   if (bus_ != nullptr) {
-    bus_->publish_pose(f.pose);
-    const double ms = ms_between(f.rx_ns, host_now().ns);
-    stats_.pose_latency_ms.add(ms);
-    window_pose_latency_.add(ms);
+    if (!f.pose_published) {
+      bus_->publish_pose(f.pose);
+      const double ms = ms_between(f.rx_ns, host_now().ns);
+      stats_.pose_latency_ms.add(ms);
+      window_pose_latency_.add(ms);
+    }
     if (options_.publish_cloud) {
       cloud_.t = f.pose.t;
       cloud_.points.resize(f.xyz_world.size() / 3);
@@ -147,7 +166,10 @@ void Publisher::on_frame(FrameRecord& f) {
     constexpr std::size_t kSlice = 3 * 8192;
     for (std::size_t i = 0; i + 2 < f.xyz_world.size(); i += 3) {
       map_->add(Eigen::Vector3d(f.xyz_world[i], f.xyz_world[i + 1], f.xyz_world[i + 2]));
-      if (i % kSlice == 0) publish_imu_poses();
+      if (i % kSlice == 0) {
+        publish_estimates();
+        publish_imu_poses();
+      }
     }
   }
 }

@@ -116,6 +116,8 @@ class Publisher {
   bool drain();
   // Publishes the queued IMU-rate poses; also called between slices of a frame's longer work.
   bool publish_imu_poses();
+  // Publishes the filter poses sent ahead of their frames (LiveOutputs::on_estimate).
+  bool publish_estimates();
   void on_frame(FrameRecord& f);
   void on_health(HealthRecord& h);
   void log_health(const HealthRecord& h);

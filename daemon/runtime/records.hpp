@@ -35,6 +35,9 @@ struct FrameRecord {
   // when an output needs it (map, cloud).
   std::vector<float> xyz_world;
   std::size_t registered_points = 0;  // before decimation
+  // The pose already left through PublisherChannels::estimates (published as soon as the update
+  // ended, before the map insertion): the publisher does not publish it again.
+  bool pose_published = false;
 };
 
 // The health snapshot as published; the publisher thread adds its threads, channels and latency.

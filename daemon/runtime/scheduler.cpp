@@ -347,10 +347,12 @@ bool Scheduler::step() {
   return true;
 }
 
-void Scheduler::emit_frame(const estimator::PipelineOutput& out, std::int64_t rx_ns, double cpu_s) {
-  predictor_.reset(out.t, estimator::Belief{out.x, out.P});
+void Scheduler::emit_frame(const estimator::PipelineOutput& out, std::int64_t rx_ns, double cpu_s,
+                           bool estimate_sent) {
+  // After emit_estimate() the predictor already starts from this state (the same one).
+  if (!estimate_sent) predictor_.reset(out.t, estimator::Belief{out.x, out.P});
   sink_.on_frame(FrameOutput{out, stats_.frames, rx_ns, 1e3 * cpu_s, last_body_imu_.gyro_rad_s,
-                             last_body_imu_.accel_m_s2});
+                             last_body_imu_.accel_m_s2, estimate_sent});
   ++stats_.frames;
   last_frame_t_ = out.t;
   last_frame_ms_ = out.report.timings.total_ms;
@@ -360,17 +362,36 @@ void Scheduler::run_update() {
   const auto t0 = Clock::now();
   const double cpu0 = process_cpu_s();
   update_out_.reset();
-  pipeline_->process_taken([this](const estimator::PipelineOutput& o) { update_out_.emplace(o); });
+  pipeline_->process_taken(
+      [this](const estimator::PipelineOutput& o) { update_out_.emplace(o); },
+      [this](const estimator::FilterEstimate& e) {
+        update_estimate_ = UpdateEstimate{e.t, e.x, e.P, e.updated, e.degeneracy};
+        estimate_ready_.store(true, std::memory_order_release);
+        if (options_.update_doorbell != nullptr) options_.update_doorbell->ring();
+      });
   update_cpu_s_ = process_cpu_s() - cpu0;
   update_wall_s_ = seconds_since(t0);
 }
 
+void Scheduler::emit_estimate_if_ready() {
+  if (estimate_emitted_ || !estimate_ready_.load(std::memory_order_acquire)) return;
+  estimate_emitted_ = true;
+  const UpdateEstimate& u = update_estimate_;  // not written again by this job
+  const auto o0 = Clock::now();
+  predictor_.reset(u.t, estimator::Belief{u.x, u.P});
+  const estimator::FilterEstimate e{u.t, u.x, u.P, u.updated, u.degeneracy};
+  sink_.on_estimate(EstimateOutput{e, stats_.frames, update_rx_ns_, last_body_imu_.gyro_rad_s,
+                                   last_body_imu_.accel_m_s2});
+  stats_.output_s += seconds_since(o0);
+}
+
 void Scheduler::finish_update() {
+  emit_estimate_if_ready();
   release_held();
   stats_.estimator_s += update_wall_s_;
   if (update_out_) {
     const auto o0 = Clock::now();
-    emit_frame(*update_out_, update_rx_ns_, update_cpu_s_);
+    emit_frame(*update_out_, update_rx_ns_, update_cpu_s_, estimate_emitted_);
     stats_.output_s += seconds_since(o0);
   }
 }
@@ -378,13 +399,19 @@ void Scheduler::finish_update() {
 std::size_t Scheduler::process_on_update_thread() {
   std::size_t done = 0;
   if (update_thread_->busy()) {
-    if (!update_thread_->done()) return 0;
+    if (!update_thread_->done()) {
+      // The pose goes out as soon as the update ended; the map insertion is still running.
+      emit_estimate_if_ready();
+      return 0;
+    }
     update_thread_->collect();
     finish_update();
     ++done;
   }
   if (pipeline_->take_group()) {
     update_rx_ns_ = current_rx_ns_;
+    estimate_ready_.store(false, std::memory_order_relaxed);  // start() publishes it
+    estimate_emitted_ = false;
     update_thread_->start();
   } else {
     refresh_status();

@@ -31,6 +31,7 @@
 // or an external one (CAN, serial: live or replayed). A LiDAR's internal IMU, when enabled, feeds
 // its clock domain even when it is not the body IMU.
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -206,7 +207,11 @@ class Scheduler {
   // After a collected update: hands over the held measurements, publishes its frame.
   void finish_update();
   // Publishes a finished frame (scheduler thread).
-  void emit_frame(const estimator::PipelineOutput& out, std::int64_t rx_ns, double cpu_s);
+  void emit_frame(const estimator::PipelineOutput& out, std::int64_t rx_ns, double cpu_s,
+                  bool estimate_sent = false);
+  // Scheduler thread, update running or just collected: hands the update's estimate to the sink
+  // (OutputSink::on_estimate) once the job has copied it, once per update.
+  void emit_estimate_if_ready();
   // Hands what arrived during an update to the estimator, in arrival order.
   void release_held();
   void refresh_status();
@@ -237,6 +242,18 @@ class Scheduler {
   double update_wall_s_ = 0.0;                           // written by the job
   double update_cpu_s_ = 0.0;                            // written by the job
   std::int64_t update_rx_ns_ = 0;  // receive time of the event that completed the group
+  // The group's estimate, copied by the job as soon as the update ended (before the map
+  // insertion) and then left alone until the next start(); estimate_ready_ publishes it.
+  struct UpdateEstimate {
+    MappedTime t;
+    estimator::State x;
+    estimator::StateMatrix P;
+    bool updated = false;
+    estimator::DegeneracyReport degeneracy;
+  };
+  UpdateEstimate update_estimate_;
+  std::atomic<bool> estimate_ready_{false};
+  bool estimate_emitted_ = false;  // scheduler thread
   // Measurements that arrived during an update, in arrival order; bounded (oldest scan or sample
   // dropped, counted) so that an estimator stuck for long cannot grow memory.
   struct HeldScan {

@@ -146,7 +146,8 @@ void VoxelMap::insert(const std::vector<CovPoint>& points, TaskRunner* runner) {
   ++generation_;
   // Voxels dropped by a slide are freed a batch per scan: freeing tens of thousands of subtrees
   // at once was the largest per-frame spike on a drive.
-  const std::size_t retire = std::min(retired_.size(), kRetiredPerInsert);
+  const std::size_t retire =
+      std::min(retired_.size(), std::max(kRetiredPerInsert, retired_.size() / 4));
   for (std::size_t i = 0; i < retire; ++i) retired_.pop_back();
   const double vs = lio_.voxel_size;
   // 1. Bucket the points by root voxel (creating roots), roots numbered in order of first touch.
@@ -272,22 +273,46 @@ void VoxelMap::resolve(const Eigen::Vector3d& p, Hint& hint) const {
 }
 
 std::size_t VoxelMap::slide(const Eigen::Vector3d& position) {
-  if (!map_.sliding) return 0;
-  if (slid_once_ && (position - last_slide_position_).norm() < map_.slide_threshold_m) return 0;
-  slid_once_ = true;
-  last_slide_position_ = position;
   const double vs = lio_.voxel_size;
   const VoxelKey c = voxel_key(position, vs);
-  const auto reach = static_cast<std::int64_t>(std::ceil(map_.half_extent_m / vs));
-  const std::size_t removed = roots_.erase_if(
-      [&](const VoxelKey& k) {
-        return std::abs(k.x - c.x) > reach || std::abs(k.y - c.y) > reach ||
-               std::abs(k.z - c.z) > reach;
-      },
-      retired_);
+  std::size_t removed = 0;
+  if (map_.sliding &&
+      (!slid_once_ || (position - last_slide_position_).norm() >= map_.slide_threshold_m)) {
+    slid_once_ = true;
+    last_slide_position_ = position;
+    const auto reach = static_cast<std::int64_t>(std::ceil(map_.half_extent_m / vs));
+    removed = roots_.erase_if(
+        [&](const VoxelKey& k) {
+          return std::abs(k.x - c.x) > reach || std::abs(k.y - c.y) > reach ||
+                 std::abs(k.z - c.z) > reach;
+        },
+        retired_);
+  }
+  if (roots_.size() > map_.max_voxels) removed += evict_over_budget(c);
   removed_ += removed;
   if (removed > 0) ++generation_;
   return removed;
+}
+
+std::size_t VoxelMap::evict_over_budget(const VoxelKey& centre) {
+  // Chebyshev distance in voxels (the sliding box's metric): the voxels at or beyond the distance
+  // that leaves 90 % of the budget go. One pass to histogram the distances, one to erase; this
+  // runs only when the budget is exceeded, and the 10 % margin keeps it from running every scan.
+  const std::size_t keep = map_.max_voxels - map_.max_voxels / 10;
+  const auto distance = [&](const VoxelKey& k) {
+    return std::max({std::abs(k.x - centre.x), std::abs(k.y - centre.y), std::abs(k.z - centre.z)});
+  };
+  std::vector<std::int64_t> distances;
+  distances.reserve(roots_.size());
+  roots_.for_each_key([&](const VoxelKey& k) { distances.push_back(distance(k)); });
+  const auto cut = distances.begin() + static_cast<std::ptrdiff_t>(keep);
+  std::nth_element(distances.begin(), cut, distances.end());
+  // Every voxel at distance >= *cut goes (ties included: at most `keep` remain).
+  const std::int64_t limit = *cut;
+  const std::size_t evicted =
+      roots_.erase_if([&](const VoxelKey& k) { return distance(k) >= limit; }, retired_);
+  evicted_ += evicted;
+  return evicted;
 }
 
 VoxelMapStats VoxelMap::stats() const {
@@ -301,6 +326,7 @@ VoxelMapStats VoxelMap::stats() const {
   s.bytes += retired.bytes + retired_.capacity() * sizeof(std::unique_ptr<Node>);
   s.retired_voxels = retired_.size();
   s.removed_voxels = removed_;
+  s.evicted_voxels = evicted_;
   return s;
 }
 
@@ -393,6 +419,12 @@ std::size_t VoxelMap::RootTable::erase_if(const std::function<bool(const VoxelKe
 void VoxelMap::RootTable::for_each(const std::function<void(const Node&)>& visit) const {
   for (const auto& e : entries_) {
     if (e.node) visit(*e.node);
+  }
+}
+
+void VoxelMap::RootTable::for_each_key(const std::function<void(const VoxelKey&)>& visit) const {
+  for (const auto& e : entries_) {
+    if (e.node) visit(e.key);
   }
 }
 

@@ -50,7 +50,8 @@ struct VoxelMapStats {
   std::size_t frozen_nodes = 0;
   std::size_t stored_points = 0;
   std::size_t bytes = 0;             // nodes + point storage (capacity), an estimate of heap use
-  std::uint64_t removed_voxels = 0;  // dropped by sliding, since construction
+  std::uint64_t removed_voxels = 0;  // dropped by sliding or the budget, since construction
+  std::uint64_t evicted_voxels = 0;  // of those, dropped by the budget (max_voxels)
   std::size_t retired_voxels = 0;    // dropped but not freed yet (freed over the next scans)
 };
 
@@ -92,7 +93,9 @@ class VoxelMap {
   void resolve(const Eigen::Vector3d& p_world, Hint& hint) const;
 
   // Drops root voxels farther than half_extent (per axis) from `position` once the sensor has
-  // moved slide_threshold since the last slide. Returns the number of voxels removed.
+  // moved slide_threshold since the last slide; then, if the map holds more than max_voxels roots,
+  // the ones farthest from `position` until 90 % of the budget is left (with or without sliding).
+  // Returns the number of voxels removed.
   std::size_t slide(const Eigen::Vector3d& position);
 
   [[nodiscard]] VoxelMapStats stats() const;
@@ -118,6 +121,7 @@ class VoxelMap {
     std::size_t erase_if(const std::function<bool(const VoxelKey&)>& remove,
                          std::vector<std::unique_ptr<Node>>& removed);
     void for_each(const std::function<void(const Node&)>& visit) const;
+    void for_each_key(const std::function<void(const VoxelKey&)>& visit) const;
     [[nodiscard]] std::size_t size() const { return size_; }
     [[nodiscard]] std::size_t bytes() const;
 
@@ -134,7 +138,10 @@ class VoxelMap {
   Eigen::Vector3d last_slide_position_ = Eigen::Vector3d::Zero();
   bool slid_once_ = false;
   std::uint64_t removed_ = 0;
-  // Voxels dropped by slide(), freed kRetiredPerInsert per insert().
+  std::uint64_t evicted_ = 0;
+  std::size_t evict_over_budget(const VoxelKey& centre);
+  // Voxels dropped by slide(), freed at least kRetiredPerInsert per insert() and at least a
+  // quarter of the backlog, so that the backlog stays bounded when voxels are dropped faster.
   static constexpr std::size_t kRetiredPerInsert = 4096;
   std::vector<std::unique_ptr<Node>> retired_;
   std::uint64_t generation_ = 1;  // bumped by every change of the map (invalidates hints)

@@ -99,6 +99,49 @@ TEST(VoxelMap, PlanesFreezeAndTheMapSlidesSoMemoryIsBounded) {
   // within the extent.
   EXPECT_LT(s.stored_points, 24000u);
   EXPECT_LT(peak_bytes, 64u * 1024 * 1024);
+  EXPECT_EQ(s.evicted_voxels, 0u);  // a normal drive never reaches the voxel budget
+}
+
+// A diverged estimate: scans land in random orientations around a position that wanders off, so
+// they fill the sliding box's volume rather than its surfaces. The budget must hold the map (and
+// the voxels awaiting release) to a bounded size, keep the voxels around the sensor and let the
+// far ones go. Without the budget this map grows with every scan (the box is 100 m wide).
+TEST(VoxelMap, AVoxelBudgetBoundsAMapFilledByADivergedEstimate) {
+  LioParams lio;
+  MapParams map;
+  map.max_voxels = 20000;
+  VoxelMap vm(lio, map);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::size_t peak_roots = 0;
+  std::size_t peak_retired = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  for (int scan = 0; scan < 120; ++scan) {
+    position += Eigen::Vector3d(0.3, 0.2, 0.05);  // drifting, slower than the slide threshold
+    std::vector<CovPoint> points(3000);
+    for (auto& p : points) {
+      // A random direction and range up to 30 m: a spinning sensor's scan.
+      p.p = position + Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 30.0;
+      p.cov = Eigen::Matrix3d::Identity() * 1e-4;
+    }
+    vm.insert(points);
+    vm.slide(position);
+    const auto st = vm.stats();
+    peak_roots = std::max(peak_roots, st.root_voxels);
+    peak_retired = std::max(peak_retired, st.retired_voxels);
+  }
+  const auto s = vm.stats();
+  EXPECT_LE(peak_roots, map.max_voxels);
+  EXPECT_GT(s.evicted_voxels, 100000u);  // 360 k points, nearly one voxel each
+  // Released at least a quarter per scan: the backlog stays below a few scans' evictions.
+  EXPECT_LT(peak_retired, 2 * map.max_voxels);
+  // The voxels around the sensor are the ones kept: a plane inserted next to it still matches.
+  vm.insert(
+      sample_plane(rng, position + Eigen::Vector3d(-2, -2, -1), {4, 0, 0}, {0, 4, 0}, 4000, 0.005));
+  vm.slide(position);
+  PlaneMatch m;
+  EXPECT_TRUE(vm.match(position + Eigen::Vector3d(0.3, 0.2, -1.0 + 0.002),
+                       Eigen::Matrix3d::Identity() * 1e-4, m));
 }
 
 }  // namespace

@@ -96,7 +96,17 @@ class PoseSink final : public daemon::runtime::OutputSink {
   void on_frame(const daemon::runtime::FrameOutput& f) override {
     poses.push_back(
         {f.estimate.t.ns, f.estimate.x.p_world_imu, Eigen::Quaterniond(f.estimate.x.R_world_imu)});
+    if (f.estimate_sent) ++frames_after_estimate;
+    // An estimate comes before its own frame, never after it nor for another one.
+    EXPECT_EQ(estimates.size(), f.estimate_sent ? poses.size() : estimates.size());
   }
+  void on_estimate(const daemon::runtime::EstimateOutput& e) override {
+    EXPECT_EQ(e.index, poses.size()) << "the estimate of the frame that comes next";
+    estimates.push_back(
+        {e.estimate.t.ns, e.estimate.x.p_world_imu, Eigen::Quaterniond(e.estimate.x.R_world_imu)});
+  }
+  std::vector<Pose> estimates;
+  std::size_t frames_after_estimate = 0;
   void on_imu_pose(const daemon::runtime::ImuPoseOutput& /*p*/) override { ++imu_poses; }
   [[nodiscard]] bool wants_imu_poses() const override { return true; }
   std::vector<Pose> poses;
@@ -137,6 +147,7 @@ TEST(SchedulerUpdateThread, GivesTheSamePosesAsTheSingleThreadedReplay) {
   PoseSink live_sink;
   drivers::capture::Doorbell bell;
   std::uint64_t jobs = 0;
+  std::size_t early_estimates = 0;
   {
     daemon::WorkerPool pool(2);
     daemon::runtime::SchedulerOptions so;
@@ -154,6 +165,10 @@ TEST(SchedulerUpdateThread, GivesTheSamePosesAsTheSingleThreadedReplay) {
     while (!s.exhausted()) {
       const bool running = s.update_running();
       s.step();
+      // The pose of the running update handed out before the update (its map insertion) ended.
+      if (s.update_running() && live_sink.estimates.size() > live_sink.poses.size()) {
+        early_estimates = live_sink.estimates.size();
+      }
       const auto& status = s.estimator_status();  // health reads this between steps
       EXPECT_EQ(status.held_scans_dropped + status.held_imu_dropped, 0U);
       held = running && s.update_running() ? held + 1 : 0;
@@ -177,6 +192,17 @@ TEST(SchedulerUpdateThread, GivesTheSamePosesAsTheSingleThreadedReplay) {
     EXPECT_EQ(a.p, b.p) << "frame " << i;
     EXPECT_EQ(a.q.coeffs(), b.q.coeffs()) << "frame " << i;
   }
+  // The daemon publishes each pose from the estimate handed out as soon as the update ended (before
+  // the map insertion): one per frame, equal to the frame's, seen while updates still ran.
+  EXPECT_TRUE(replay_sink.estimates.empty());
+  ASSERT_EQ(live_sink.estimates.size(), live_sink.poses.size());
+  EXPECT_EQ(live_sink.frames_after_estimate, live_sink.poses.size());
+  for (std::size_t i = 0; i < live_sink.poses.size(); ++i) {
+    EXPECT_EQ(live_sink.estimates[i].t_ns, live_sink.poses[i].t_ns) << "frame " << i;
+    EXPECT_EQ(live_sink.estimates[i].p, live_sink.poses[i].p) << "frame " << i;
+    EXPECT_EQ(live_sink.estimates[i].q.coeffs(), live_sink.poses[i].q.coeffs()) << "frame " << i;
+  }
+  EXPECT_GT(early_estimates, 0U) << "no pose left before its update's end";
   // IMU-rate poses keep coming whichever thread runs the update.
   EXPECT_GT(live_sink.imu_poses, 100U);
 }
