@@ -140,6 +140,10 @@ void DeviceThread::run(const std::stop_token& stop) {
         if (published_.opens.load(std::memory_order_relaxed) > 0) bump(published_.reconnects);
         bump(published_.opens);
         publish(published_.state, DeviceState::kStreaming);
+        // Health shows why a device is not streaming; once it streams again the reason is history
+        // (the reconnect and failure counters keep it). An operator read a stale error next to
+        // STREAMING as a current fault.
+        set_error({});
       } catch (const std::exception& e) {
         bump(published_.open_failures);
         set_error(e.what());

@@ -107,7 +107,8 @@ class DeviceThread {
   void stop();
 
   [[nodiscard]] DeviceThreadCounters counters() const;
-  // The newest open failure or loss reason (empty if none).
+  // Why the device is not streaming: the newest open failure or loss reason; cleared when it
+  // (re)opens (empty while streaming).
   [[nodiscard]] std::string last_error() const;
 
  private:

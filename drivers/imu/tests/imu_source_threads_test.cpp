@@ -140,6 +140,7 @@ TEST(ImuSourceThreads, CanSourceDecodesReconnectsAfterTheInterfaceVanishes) {
   EXPECT_EQ(h.source.streams.at(0).stale_events, 1u);
   EXPECT_EQ(h.source.streams.at(0).recoveries, 1u);
   EXPECT_EQ(h.source.reconnects, 1u);
+  EXPECT_EQ(h.source.last_error, "") << "the loss is history once it streams again";
   EXPECT_EQ(h.bus.frames, 240u);  // totals across sockets
   EXPECT_EQ(h.decoder.sequence_gaps, 0u);
   EXPECT_GT(h.device.wakeups, 10u);
