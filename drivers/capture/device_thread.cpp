@@ -121,6 +121,10 @@ void DeviceThread::run(const std::stop_token& stop) {
   std::int64_t streaming_since_ns = host_now().ns;
   std::int64_t next_open_ns = first_retry_ns_;
   const std::int64_t silence_ns = config_.silence_timeout.count();
+  // Health shows why a device is not streaming; once data flows after a reopen the reason is
+  // history (the loss and failure counters keep it): an operator read a stale error next to
+  // STREAMING as a current fault. A reopened device that stays silent keeps its reason.
+  bool error_outdated = false;
   while (!stop.stop_requested()) {
     ++wakeups;
     publish(published_.wakeups, wakeups);
@@ -140,10 +144,7 @@ void DeviceThread::run(const std::stop_token& stop) {
         if (published_.opens.load(std::memory_order_relaxed) > 0) bump(published_.reconnects);
         bump(published_.opens);
         publish(published_.state, DeviceState::kStreaming);
-        // Health shows why a device is not streaming; once it streams again the reason is history
-        // (the reconnect and failure counters keep it). An operator read a stale error next to
-        // STREAMING as a current fault.
-        set_error({});
+        error_outdated = true;
       } catch (const std::exception& e) {
         bump(published_.open_failures);
         set_error(e.what());
@@ -156,6 +157,10 @@ void DeviceThread::run(const std::stop_token& stop) {
     if (w == DeviceLink::Wait::kData) {
       last_data_ns = now;
       publish(published_.last_data_ns, last_data_ns);
+      if (error_outdated) {
+        set_error({});
+        error_outdated = false;
+      }
       if (config_.doorbell != nullptr) config_.doorbell->ring();
     }
     if (w != DeviceLink::Wait::kLost && !link_.service()) w = DeviceLink::Wait::kLost;

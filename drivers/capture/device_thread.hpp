@@ -107,8 +107,8 @@ class DeviceThread {
   void stop();
 
   [[nodiscard]] DeviceThreadCounters counters() const;
-  // Why the device is not streaming: the newest open failure or loss reason; cleared when it
-  // (re)opens (empty while streaming).
+  // Why the device is not streaming: the newest open failure or loss reason; cleared when data
+  // flows again after a reopen.
   [[nodiscard]] std::string last_error() const;
 
  private:

@@ -162,19 +162,25 @@ TEST(SchedulerUpdateThread, GivesTheSamePosesAsTheSingleThreadedReplay) {
     // the loop waits for it, as a sensor's pace would make it.
     std::size_t held = 0;
     std::size_t max_held = 0;
-    while (!s.exhausted()) {
-      const bool running = s.update_running();
-      s.step();
-      // The pose of the running update handed out before the update (its map insertion) ended.
+    // The pose of the running update handed out before the update (its map insertion) ended.
+    const auto observe = [&] {
       if (s.update_running() && live_sink.estimates.size() > live_sink.poses.size()) {
         early_estimates = live_sink.estimates.size();
       }
+    };
+    while (!s.exhausted()) {
+      const bool running = s.update_running();
+      s.step();
+      observe();
       const auto& status = s.estimator_status();  // health reads this between steps
       EXPECT_EQ(status.held_scans_dropped + status.held_imu_dropped, 0U);
       held = running && s.update_running() ? held + 1 : 0;
       max_held = std::max(max_held, held);
       if (held >= 60) {
-        while (s.update_running()) s.process_due();
+        while (s.update_running()) {
+          s.process_due();
+          observe();
+        }
         held = 0;
       }
     }
