@@ -154,6 +154,7 @@ std::unique_ptr<imu::CanImuSource> open_can_imu_source(const SensorConfig& senso
   c.socket.fd_frames = sensor.can.fd_frames;
   // ring_capacity counts samples; a sample takes up to three frames.
   c.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity) * 3;
+  c.tap = options.can_tap;
   c.thread = thread_config("can:", sensor, config, options);
   c.timing.stale_after = stale_after(config);
   auto decoder = make_can_imu_decoder(sensor.can, sensor.name);
@@ -169,6 +170,8 @@ std::unique_ptr<imu::SerialImuSource> open_serial_imu_source(const SensorConfig&
   c.path = device.path;
   c.baud_rate = sensor.serial.baud_rate;
   c.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity);
+  c.chunk_bytes = kSerialChunkBytes;
+  c.tap = options.serial_tap;
   c.thread = thread_config("imu:", sensor, config, options);
   c.timing.stale_after = stale_after(config);
   auto decoder = make_serial_imu_decoder(sensor.serial, sensor.name);

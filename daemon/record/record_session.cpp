@@ -62,8 +62,18 @@ std::filesystem::path new_recording_folder(const std::filesystem::path& parent) 
 }
 
 bool is_recorded(const SensorConfig& sensor) {
-  return sensor.enabled && is_packet_lidar(sensor.driver) &&
-         std::holds_alternative<UdpSourceConfig>(sensor.source);
+  if (!sensor.enabled) return false;
+  if (is_packet_lidar(sensor.driver)) return std::holds_alternative<UdpSourceConfig>(sensor.source);
+  if (sensor.driver == Driver::can_imu || sensor.driver == Driver::serial_imu) {
+    return std::holds_alternative<DeviceSourceConfig>(sensor.source);
+  }
+  return false;
+}
+
+std::string recorded_file_name(const SensorConfig& sensor) {
+  if (sensor.driver == Driver::can_imu) return sensor.name + ".log";
+  if (sensor.driver == Driver::serial_imu) return sensor.name + ".serial";
+  return sensor.name + ".pcap";
 }
 
 std::vector<ConfigProblem> record_problems(const LivodConfig& config) {
@@ -76,12 +86,13 @@ std::vector<ConfigProblem> record_problems(const LivodConfig& config) {
           i, s, "it replays a recording: a recording is made from live sensors (copy the file)"));
       continue;
     }
+    if (s.driver == Driver::can_imu || s.driver == Driver::serial_imu) continue;
     if (!is_packet_lidar(s.driver)) {
       out.push_back(not_implemented(
           i, s,
-          "only packet LiDARs over UDP are recorded today; cameras (EuRoC folders), CAN IMUs "
-          "(candump logs) and serial IMUs (serial captures) are not (disable the sensor to "
-          "record the others)"));
+          "packet LiDARs over UDP, CAN IMUs (candump logs) and serial IMUs (serial captures) are "
+          "recorded; cameras (EuRoC folders) are not yet (disable the sensor to record the "
+          "others)"));
       continue;
     }
     const auto* udp = std::get_if<UdpSourceConfig>(&s.source);
@@ -145,7 +156,7 @@ std::string recorded_config_text(const LivodConfig& config) {
     const SensorConfig& s = *it;
     if (is_recorded(s)) {
       YAML::Node source;
-      source["replay"]["file"] = s.name + ".pcap";
+      source["replay"]["file"] = recorded_file_name(s);
       node["source"] = source;
       if (!s.metadata.empty()) node["metadata"] = s.name + ".json";
       if (!s.calibration.empty()) node["calibration"] = calibration_name(s);
@@ -212,8 +223,8 @@ std::vector<std::string> RecordSession::finish() {
       text += "  records from " + utc_text(s.first_ns) + " to " + utc_text(s.last_ns) + "\n";
     }
     for (const LossSpan& l : s.losses) {
-      text += "  lost " + std::to_string(l.packets) + " packets from " + utc_text(l.first_ns) +
-              " to " + utc_text(l.last_ns) + ": " + l.reason + "\n";
+      text += "  lost " + std::to_string(l.packets) + " " + s.unit + " from " +
+              utc_text(l.first_ns) + " to " + utc_text(l.last_ns) + ": " + l.reason + "\n";
     }
   }
   try {

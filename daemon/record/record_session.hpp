@@ -4,11 +4,14 @@
 // the folder replayable (docs/record.md):
 //
 //   DIR/config.yaml      the configuration with every recorded sensor's source replaced by its
-//                        file (source: {replay: {file: <sensor>.pcap}}) and the files it names
+//                        file (source: {replay: {file: <sensor>.pcap}}, .log, .serial) and the
+//                        files it names
 //                        (Ouster metadata, Velodyne/Hesai calibration) copied beside it, so
 //                        `livod replay --config DIR/config.yaml -o OUT` replays the recording.
 //                        Written when the recording starts: a killed recorder leaves it too.
 //   DIR/<sensor>.pcap    one per LiDAR (recorder.hpp)
+//   DIR/<sensor>.log     one per CAN IMU: a candump log
+//   DIR/<sensor>.serial  one per serial / USB IMU: a livod serial capture
 //   DIR/recording.txt    written at the end: duration, per file packets, bytes and every loss
 //                        (reason, packets, recording time it covers)
 
@@ -24,9 +27,10 @@
 namespace livod::daemon::record {
 
 // What keeps a configuration from being recorded, as configuration problems (not_implemented,
-// naming the sensor): every enabled sensor must be a live packet LiDAR over UDP (cameras, CAN and
-// serial IMUs are not recorded yet); its ports must be the ones its replay reads (the driver's
-// defaults: a replay source cannot name ports yet); an Ouster needs its metadata file.
+// naming the sensor): every enabled sensor must be a live packet LiDAR over UDP or a CAN / serial
+// IMU with a device source (cameras are not recorded yet); a LiDAR's ports must be the ones its
+// replay reads (the driver's defaults: a replay source cannot name ports yet); an Ouster needs
+// its metadata file.
 std::vector<ConfigProblem> record_problems(const LivodConfig& config);
 
 class RecordSession {
@@ -68,7 +72,11 @@ std::vector<std::pair<std::filesystem::path, std::string>> recorded_files(
 // own folder and none is overwritten.
 std::filesystem::path new_recording_folder(const std::filesystem::path& parent);
 
-// True for the sensors a recording holds: enabled live packet LiDARs over UDP.
+// True for the sensors a recording holds: enabled live packet LiDARs over UDP, CAN and serial
+// IMUs with a device source.
 bool is_recorded(const SensorConfig& sensor);
+// The recorded sensor's file in the recording's folder: <name>.pcap, <name>.log (candump),
+// <name>.serial.
+std::string recorded_file_name(const SensorConfig& sensor);
 
 }  // namespace livod::daemon::record

@@ -4,6 +4,8 @@
 //
 //   capture thread ──tap (PacketRing: bounded, full ⇒ drop + count)──▶ recorder thread
 //                                                                      ─▶ <sensor>.pcap (blocks)
+//   CAN IMU capture thread ──tap (SpscRing<CanRecord>)──▶ recorder thread ─▶ <sensor>.log
+//   serial IMU capture thread ──tap (PacketRing of reads)──▶ recorder thread ─▶ <sensor>.serial
 //
 // Each capture thread copies every datagram into a tap ring owned by the recorder, beside its own
 // ring to the scheduler (CaptureThreadConfig::tap). The recorder thread merges a LiDAR's streams
@@ -21,11 +23,13 @@
 //     `retry_period` (records arriving meanwhile are lost with the same reason);
 //   - truncated: a datagram longer than its slot (it would be a wrong packet in the file).
 //
-// Devices (cameras, CAN and serial IMUs) plug in as further kinds of recorded stream with their
-// own writers (io/euroc_writer.hpp, io/candump.hpp, io/serial_capture.hpp) and the same loss
-// accounting; only packet LiDARs are recorded today (record_plan.hpp refuses the rest).
+// CAN IMUs are recorded as candump logs (io/candump.hpp: `candump -l` lines, the frame's kernel
+// receive time at the format's microsecond resolution, the configured interface's name), serial /
+// USB IMUs as livod serial captures (io/serial_capture.hpp: every read as the host read it, with
+// its receive time in ns); both with the same blocks, record times (UTC by the one offset) and
+// loss accounting as the pcaps, so a replay merges all the recording's files on one timeline.
 //
-// Threads: add_packet_stream() and start() on the owning thread (packets a capture thread pushes
+// Threads: add_*_stream() and start() on the owning thread (packets a capture thread pushes
 // before start() wait in the tap); stop() after the capture threads stopped (it drains the taps);
 // stats() and heartbeat() from any thread.
 
@@ -38,9 +42,11 @@
 #include <thread>
 #include <vector>
 
+#include "core/spsc_ring.hpp"
 #include "core/time.hpp"
 #include "daemon/runtime/heartbeat.hpp"
 #include "drivers/capture/packet_ring.hpp"
+#include "drivers/imu/imu_decoder.hpp"
 
 namespace livod::daemon::record {
 
@@ -65,6 +71,21 @@ struct PacketStreamSpec {
   std::uint32_t dst_ip = 0;        // written as the frames' destination (host order; 0 unknown)
 };
 
+// The kinds of file a recording holds.
+enum class RecordedFormat : std::uint8_t { pcap, candump, serial };
+
+// A CAN IMU to record into `<sensor>.log` (a candump log).
+struct CanStreamSpec {
+  std::string sensor;
+  std::string interface;  // written in every line ("can0")
+};
+
+// A serial / USB IMU to record into `<sensor>.serial` (a livod serial capture).
+struct SerialStreamSpec {
+  std::string sensor;
+  std::size_t slot_bytes = 4096;  // the capture thread's largest read
+};
+
 struct LossSpan {
   std::string reason;         // "buffer full (disk too slow)", "write failed: No space left ..."
   std::int64_t first_ns = 0;  // recording time (the pcap's clock, UTC ns) of the first loss
@@ -77,18 +98,20 @@ struct FileStats {
   std::string sensor;
   std::filesystem::path file;
   std::vector<std::string> streams;
-  std::uint64_t packets = 0;        // datagrams written
-  std::uint64_t payload_bytes = 0;  // their UDP payload bytes
+  std::string unit = "packets";     // what `packets` counts: "packets", "frames" (CAN), "reads"
+  std::uint64_t packets = 0;        // datagrams (CAN frames, serial reads) written
+  std::uint64_t payload_bytes = 0;  // their UDP payload (CAN data, serial) bytes
   std::uint64_t file_bytes = 0;     // the file's size
   std::int64_t first_ns = 0;        // first and last record time written (UTC ns); 0: none
   std::int64_t last_ns = 0;
   std::uint64_t lost_buffer_full = 0;
   std::uint64_t lost_write_failed = 0;
   std::uint64_t lost_truncated = 0;
-  std::vector<LossSpan> losses;  // in time order; consecutive losses of one reason merged
-  std::string last_error;        // the last write error ("No space left on device"), or empty
+  std::uint64_t lost_invalid = 0;  // a record the file's format cannot hold (never seen live)
+  std::vector<LossSpan> losses;    // in time order; consecutive losses of one reason merged
+  std::string last_error;          // the last write error ("No space left on device"), or empty
   [[nodiscard]] std::uint64_t lost() const {
-    return lost_buffer_full + lost_write_failed + lost_truncated;
+    return lost_buffer_full + lost_write_failed + lost_truncated + lost_invalid;
   }
 };
 
@@ -104,6 +127,11 @@ class Recorder {
   // livod::Error naming the file) and returns the tap ring the stream's capture thread pushes
   // into. The ring lives as long as the recorder.
   drivers::capture::PacketRing& add_packet_stream(const PacketStreamSpec& spec);
+  // Before start(): opens <sensor>.log (throws livod::Error naming the file, or for a second
+  // stream of the sensor) and returns the tap its CAN capture thread pushes into.
+  SpscRing<imu::CanRecord>& add_can_stream(const CanStreamSpec& spec);
+  // Before start(): opens <sensor>.serial and writes its header; returns the tap of its reads.
+  drivers::capture::PacketRing& add_serial_stream(const SerialStreamSpec& spec);
 
   void start();
   // Drains every tap (call once the capture threads stopped), writes the last blocks, syncs and
@@ -120,6 +148,7 @@ class Recorder {
 
  private:
   struct File;
+  File& new_file(const std::string& sensor, const std::string& extension, RecordedFormat format);
   void run(const std::stop_token& stop);
   bool turn(HostTime now, bool final);
   void publish_stats();

@@ -206,15 +206,29 @@ TEST(RecordSession, SensorsThatCannotBeRecordedAreNotImplementedErrors) {
       << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
       << "  - name: hdl\n    driver: velodyne\n    model: VLP-16\n"
       << "    source: {udp: {ports: {lidar: 2370}}}\n"
+      << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
+      << "  - name: mti\n    driver: serial_imu\n    source: {device: {path: /dev/ttyUSB0}}\n"
+      << "    serial: {protocol: xsens_mtdata2}\n"
+      << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
+      << "  - name: sbg\n    driver: can_imu\n    source: {device: {interface: can0}}\n"
+      << "    can: {decoder: sbg}\n"
+      << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
+      << "  - name: rec\n    driver: can_imu\n    source: {replay: {file: old.log}}\n"
+      << "    can: {decoder: sbg}\n"
       << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n";
   const ConfigResult loaded = load_config(config_path);
   // (The configuration itself may have its own problems, e.g. a second LiDAR; the recording's
   // are what matter here.)
+  // The IMUs with a device source are recorded (candump log, serial capture); a sensor that
+  // replays a file is not.
   const auto problems = record_problems(loaded.config);
-  ASSERT_EQ(problems.size(), 2U);
+  ASSERT_EQ(problems.size(), 3U);
   for (const auto& p : problems) EXPECT_EQ(p.kind, ProblemKind::not_implemented);
   EXPECT_NE(problems[0].message.find("metadata"), std::string::npos) << problems[0].message;
   EXPECT_NE(problems[1].message.find("port 2370"), std::string::npos) << problems[1].message;
+  EXPECT_NE(problems[2].message.find("'rec'"), std::string::npos) << problems[2].message;
+  EXPECT_NE(problems[2].message.find("replays a recording"), std::string::npos)
+      << problems[2].message;
 }
 
 }  // namespace
