@@ -1,9 +1,9 @@
 // `livod record --config FILE -o DIR`: the configured live sensors' raw data into DIR, without
 // the estimator (docs/record.md). The same capture threads as `livod run` (one per UDP socket,
-// kernel receive times; one per CAN or serial IMU) feed the recorder's IO thread; the sensors are
-// brought up and supervised
-// as in `livod run` (Livox handshake and heartbeats, Ouster re-init); their packets are decoded
-// only for health (rates, STALE, sequence gaps). Runs until SIGINT/SIGTERM or --max-duration.
+// kernel receive times; one per camera, CAN or serial IMU) feed the recorder's IO thread; the
+// sensors are brought up and supervised as in `livod run` (Livox handshake and heartbeats, Ouster
+// re-init); their packets are decoded only for health (rates, STALE, sequence gaps). Runs until
+// SIGINT/SIGTERM or --max-duration.
 //
 // Exit codes: 0 stopped with every file closed (losses are reported in the log and
 // DIR/recording.txt); 1 a configuration with errors or one that cannot be recorded (every
@@ -25,6 +25,7 @@
 #include "daemon/logging.hpp"
 #include "daemon/preflight.hpp"
 #include "daemon/record/record_session.hpp"
+#include "daemon/runtime/live_camera_source.hpp"
 #include "daemon/runtime/live_imu_source.hpp"
 #include "daemon/runtime/live_lidar_source.hpp"
 #include "daemon/runtime/signals.hpp"
@@ -84,9 +85,11 @@ int run_record(const RecordArgs& args, const CLI::App& root) {
       if (!record::is_recorded(s)) continue;
       if (is_packet_lidar(s.driver)) {
         sources.push_back(runtime::open_live_lidar(s, lo));
+      } else if (sensor_kind(s.driver) == SensorKind::camera) {
+        // A camera or IMU that is not there yet is waited for (reported, retried every second),
+        // as in `livod run`.
+        sources.push_back(runtime::open_live_camera(s, config, nullptr, &session.recorder()));
       } else {
-        // A CAN / serial IMU that is not there yet is waited for (reported, retried every
-        // second), as in `livod run`.
         sources.push_back(runtime::open_live_imu(s, config, nullptr, &session.recorder()));
       }
     }
@@ -160,7 +163,7 @@ void add_record_command(CLI::App& app, CommandContext& ctx) {
   auto* cmd = app.add_subcommand(
       "record",
       "Record the configured live sensors' raw data (pcap per LiDAR, candump log per CAN IMU, "
-      "serial capture per serial IMU) and a replayable "
+      "serial capture per serial IMU, EuRoC folder per camera) and a replayable "
       "configuration into a folder, until SIGINT/SIGTERM");
   cmd->add_option("--config", args->config, "The YAML configuration (its live sensors)")
       ->required()

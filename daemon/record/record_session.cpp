@@ -64,7 +64,8 @@ std::filesystem::path new_recording_folder(const std::filesystem::path& parent) 
 bool is_recorded(const SensorConfig& sensor) {
   if (!sensor.enabled) return false;
   if (is_packet_lidar(sensor.driver)) return std::holds_alternative<UdpSourceConfig>(sensor.source);
-  if (sensor.driver == Driver::can_imu || sensor.driver == Driver::serial_imu) {
+  if (sensor.driver == Driver::can_imu || sensor.driver == Driver::serial_imu ||
+      sensor.driver == Driver::v4l2 || sensor.driver == Driver::aravis) {
     return std::holds_alternative<DeviceSourceConfig>(sensor.source);
   }
   return false;
@@ -73,6 +74,7 @@ bool is_recorded(const SensorConfig& sensor) {
 std::string recorded_file_name(const SensorConfig& sensor) {
   if (sensor.driver == Driver::can_imu) return sensor.name + ".log";
   if (sensor.driver == Driver::serial_imu) return sensor.name + ".serial";
+  if (sensor.driver == Driver::v4l2 || sensor.driver == Driver::aravis) return sensor.name;
   return sensor.name + ".pcap";
 }
 
@@ -86,13 +88,16 @@ std::vector<ConfigProblem> record_problems(const LivodConfig& config) {
           i, s, "it replays a recording: a recording is made from live sensors (copy the file)"));
       continue;
     }
-    if (s.driver == Driver::can_imu || s.driver == Driver::serial_imu) continue;
+    if (s.driver == Driver::can_imu || s.driver == Driver::serial_imu || s.driver == Driver::v4l2 ||
+        s.driver == Driver::aravis) {
+      continue;  // a device source (the configuration checks report any other)
+    }
     if (!is_packet_lidar(s.driver)) {
       out.push_back(not_implemented(
           i, s,
-          "packet LiDARs over UDP, CAN IMUs (candump logs) and serial IMUs (serial captures) are "
-          "recorded; cameras (EuRoC folders) are not yet (disable the sensor to record the "
-          "others)"));
+          "livod records live packet LiDARs over UDP, cameras (EuRoC folders), CAN IMUs "
+          "(candump logs) and serial IMUs (serial captures); this is none of them (disable the "
+          "sensor to record the others)"));
       continue;
     }
     const auto* udp = std::get_if<UdpSourceConfig>(&s.source);
@@ -157,6 +162,17 @@ std::string recorded_config_text(const LivodConfig& config) {
     if (is_recorded(s)) {
       YAML::Node source;
       source["replay"]["file"] = recorded_file_name(s);
+      if (sensor_kind(s.driver) == SensorKind::camera) {
+        // The folder's times are the live mid-exposure times on the common timeline (the camera
+        // clock and time_offset_s applied) of the frames the capture thread kept (decimation
+        // applied): the replay takes them as they are.
+        source["replay"]["format"] = "euroc";
+        YAML::Node clock;
+        clock["mode"] = "direct";
+        node["clock"] = clock;
+        node["time_offset_s"] = 0.0;
+        if (YAML::Node camera = node["camera"]; camera && camera.IsMap()) camera["decimation"] = 1;
+      }
       node["source"] = source;
       if (!s.metadata.empty()) node["metadata"] = s.name + ".json";
       if (!s.calibration.empty()) node["calibration"] = calibration_name(s);

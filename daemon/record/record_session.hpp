@@ -12,6 +12,9 @@
 //   DIR/<sensor>.pcap    one per LiDAR (recorder.hpp)
 //   DIR/<sensor>.log     one per CAN IMU: a candump log
 //   DIR/<sensor>.serial  one per serial / USB IMU: a livod serial capture
+//   DIR/<sensor>/        one per camera: an EuRoC/ASL folder (data.csv, data/<ns>.png); its
+//                        sensor's clock becomes `direct`, time_offset_s 0, decimation 1 (the
+//                        folder holds the live frames' mapped times)
 //   DIR/recording.txt    written at the end: duration, per file packets, bytes and every loss
 //                        (reason, packets, recording time it covers)
 
@@ -27,8 +30,8 @@
 namespace livod::daemon::record {
 
 // What keeps a configuration from being recorded, as configuration problems (not_implemented,
-// naming the sensor): every enabled sensor must be a live packet LiDAR over UDP or a CAN / serial
-// IMU with a device source (cameras are not recorded yet); a LiDAR's ports must be the ones its
+// naming the sensor): every enabled sensor must be a live packet LiDAR over UDP, or a camera or a
+// CAN / serial IMU with a device source; a LiDAR's ports must be the ones its
 // replay reads (the driver's defaults: a replay source cannot name ports yet); an Ouster needs
 // its metadata file.
 std::vector<ConfigProblem> record_problems(const LivodConfig& config);
@@ -72,11 +75,11 @@ std::vector<std::pair<std::filesystem::path, std::string>> recorded_files(
 // own folder and none is overwritten.
 std::filesystem::path new_recording_folder(const std::filesystem::path& parent);
 
-// True for the sensors a recording holds: enabled live packet LiDARs over UDP, CAN and serial
-// IMUs with a device source.
+// True for the sensors a recording holds: enabled live packet LiDARs over UDP, cameras, CAN and
+// serial IMUs with a device source.
 bool is_recorded(const SensorConfig& sensor);
 // The recorded sensor's file in the recording's folder: <name>.pcap, <name>.log (candump),
-// <name>.serial.
+// <name>.serial, <name> (a camera's EuRoC folder).
 std::string recorded_file_name(const SensorConfig& sensor);
 
 }  // namespace livod::daemon::record

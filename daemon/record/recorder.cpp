@@ -14,6 +14,7 @@
 #include "drivers/imu/candump_frames.hpp"
 #include "io/block_file.hpp"
 #include "io/candump.hpp"
+#include "io/euroc_writer.hpp"
 #include "io/pcap_records.hpp"
 #include "io/serial_capture.hpp"
 
@@ -22,6 +23,11 @@ namespace {
 
 constexpr std::size_t kMinTapPackets = 256;
 constexpr std::size_t kMaxTapPackets = 16384;
+constexpr std::size_t kMinTapFrames = 4;  // camera taps
+constexpr std::size_t kMaxTapFrames = 64;
+// Frames a camera writes per turn of the recorder thread (PNG encoding is slow: the LiDARs' and
+// IMUs' taps are served between them).
+constexpr int kFramesPerTurn = 2;
 // A loss span is merged with the previous one of the same reason when they are this close.
 constexpr std::int64_t kMergeLossNs = 1'000'000'000;
 constexpr std::size_t kMaxLossSpans = 1000;  // beyond: merged into the last one
@@ -127,6 +133,28 @@ struct Recorder::File {
   FileStats stats;
 };
 
+struct Recorder::CameraFolder {
+  CameraFolder(const std::filesystem::path& folder, const CameraStreamSpec& spec,
+               std::size_t capacity)
+      : tap(capacity, std::max<std::size_t>(spec.frame_bytes, 1)),
+        clock(spec.clock),
+        writer(folder) {
+    stats.sensor = spec.sensor;
+    stats.file = folder;
+    stats.streams.push_back("frames");
+    stats.unit = "frames";
+  }
+
+  camera::FrameRing tap;
+  camera::CameraClock clock;
+  io::EurocCameraWriter writer;
+  std::uint64_t overruns_seen = 0;
+  std::optional<HostTime> unflushed_since;  // rows written to data.csv since its last flush
+  HostTime last_sync{0};
+  std::int64_t newest_ns = 0;
+  FileStats stats;
+};
+
 Recorder::Recorder(RecorderOptions options) : options_(std::move(options)) {
   std::error_code ec;
   std::filesystem::create_directories(options_.dir, ec);
@@ -197,6 +225,15 @@ drivers::capture::PacketRing& Recorder::add_serial_stream(const SerialStreamSpec
   f.streams.push_back(std::move(stream));
   f.stats.streams.push_back("serial");
   return *f.streams.back().packets;
+}
+
+camera::FrameRing& Recorder::add_camera_stream(const CameraStreamSpec& spec) {
+  if (started_) throw Error("Recorder: streams must be added before start()");
+  const std::size_t capacity =
+      std::clamp(options_.stream_buffer_bytes / std::max<std::size_t>(spec.frame_bytes, 1),
+                 kMinTapFrames, kMaxTapFrames);
+  cameras_.push_back(std::make_unique<CameraFolder>(options_.dir / spec.sensor, spec, capacity));
+  return cameras_.back()->tap;
 }
 
 void Recorder::start() {
@@ -349,13 +386,83 @@ bool Recorder::turn(HostTime now, bool final) {
       f.last_sync = now;
     }
   }
+  if (turn_cameras(now, final)) did = true;
+  return did;
+}
+
+bool Recorder::turn_cameras(HostTime now, bool final) {
+  bool did = false;
+  for (auto& cp : cameras_) {
+    CameraFolder& c = *cp;
+    for (int n = 0; final || n < kFramesPerTurn; ++n) {
+      const camera::FrameRing::Entry* entry = c.tap.front();
+      if (entry == nullptr) break;
+      did = true;
+      camera::CameraFrame frame;
+      frame.info = entry->info;
+      frame.image =
+          cv::Mat(entry->info.height, entry->info.width, camera::cv_type(entry->info.format),
+                  const_cast<std::byte*>(entry->pixels.data()), entry->info.stride);
+      c.clock.map(frame);
+      const std::int64_t t = frame.mid_exposure.ns + realtime_offset_ns_;
+      const std::uint64_t bytes =
+          static_cast<std::uint64_t>(entry->info.height) * entry->info.stride;
+      c.newest_ns = std::max(c.newest_ns, t);
+      try {
+        std::optional<Nanoseconds> exposure;
+        if (frame.info.exposure.count() > 0) exposure = frame.info.exposure;
+        c.writer.write(SensorTime(t), frame.image, exposure);
+        ++c.stats.packets;
+        c.stats.payload_bytes += bytes;
+        if (c.stats.first_ns == 0) c.stats.first_ns = t;
+        c.stats.last_ns = t;
+        c.stats.file_bytes = c.writer.bytes();
+        if (!c.unflushed_since) c.unflushed_since = now;
+      } catch (const std::invalid_argument& e) {
+        // A frame time not after the previous one (a camera clock stepping back).
+        ++c.stats.lost_invalid;
+        note_loss(c.stats, std::string("not written: ") + e.what(), t, t, 1, bytes);
+      } catch (const std::exception& e) {
+        const std::string reason = std::string("write failed: ") + e.what();
+        if (c.stats.lost_write_failed == 0) {
+          spdlog::error("record: {}: {} (the frame is lost; the frames written stay)",
+                        c.stats.file.string(), reason);
+        }
+        ++c.stats.lost_write_failed;
+        c.stats.last_error = e.what();
+        note_loss(c.stats, reason, t, t, 1, bytes);
+      }
+      frame.image = cv::Mat();
+      c.tap.pop();
+    }
+    if (const std::uint64_t overruns = c.tap.overruns(); overruns != c.overruns_seen) {
+      const std::uint64_t lost = overruns - c.overruns_seen;
+      if (c.stats.lost_buffer_full == 0) {
+        spdlog::warn("record: {}: {} frames dropped: {}", c.stats.file.filename().string(), lost,
+                     kBufferFull);
+      }
+      c.stats.lost_buffer_full += lost;
+      note_loss(c.stats, kBufferFull, c.newest_ns, c.newest_ns, lost, 0);
+      c.overruns_seen = overruns;
+    }
+    if (c.unflushed_since && (final || now - *c.unflushed_since >= options_.flush_period)) {
+      try {
+        c.writer.flush();
+      } catch (const std::exception& e) {
+        c.stats.last_error = e.what();
+        spdlog::error("record: {}", e.what());
+      }
+      c.unflushed_since.reset();
+    }
+  }
   return did;
 }
 
 void Recorder::publish_stats() {
   std::vector<FileStats> snapshot;
-  snapshot.reserve(files_.size());
+  snapshot.reserve(files_.size() + cameras_.size());
   for (const auto& f : files_) snapshot.push_back(f->stats);
+  for (const auto& c : cameras_) snapshot.push_back(c->stats);
   const std::lock_guard lock(stats_mutex_);
   stats_ = std::move(snapshot);
 }

@@ -6,6 +6,7 @@
 //                                                                      ─▶ <sensor>.pcap (blocks)
 //   CAN IMU capture thread ──tap (SpscRing<CanRecord>)──▶ recorder thread ─▶ <sensor>.log
 //   serial IMU capture thread ──tap (PacketRing of reads)──▶ recorder thread ─▶ <sensor>.serial
+//   camera capture thread ──tap (FrameRing)──▶ recorder thread: camera clock, PNG ─▶ <sensor>/
 //
 // Each capture thread copies every datagram into a tap ring owned by the recorder, beside its own
 // ring to the scheduler (CaptureThreadConfig::tap). The recorder thread merges a LiDAR's streams
@@ -28,6 +29,12 @@
 // USB IMUs as livod serial captures (io/serial_capture.hpp: every read as the host read it, with
 // its receive time in ns); both with the same blocks, record times (UTC by the one offset) and
 // loss accounting as the pcaps, so a replay merges all the recording's files on one timeline.
+// Cameras are recorded as EuRoC/ASL folders (io/euroc_writer.hpp: lossless PNG per frame,
+// data.csv with the exposure): the recorder thread maps each frame through its own CameraClock
+// (the same configuration and the same frames as the live source's) and names it by its
+// mid-exposure time on the common timeline, on the pcaps' UTC clock; it encodes the PNGs (never a
+// capture thread). data.csv is flushed with the same period as the blocks; a frame that cannot be
+// written (disk full) is lost and counted, the frames before it stay.
 //
 // Threads: add_*_stream() and start() on the owning thread (packets a capture thread pushes
 // before start() wait in the tap); stop() after the capture threads stopped (it drains the taps);
@@ -45,6 +52,8 @@
 #include "core/spsc_ring.hpp"
 #include "core/time.hpp"
 #include "daemon/runtime/heartbeat.hpp"
+#include "drivers/camera/camera_clock.hpp"
+#include "drivers/camera/frame_ring.hpp"
 #include "drivers/capture/packet_ring.hpp"
 #include "drivers/imu/imu_decoder.hpp"
 
@@ -86,6 +95,13 @@ struct SerialStreamSpec {
   std::size_t slot_bytes = 4096;  // the capture thread's largest read
 };
 
+// A camera to record into the EuRoC folder `<sensor>/` (data.csv, data/<ns>.png).
+struct CameraStreamSpec {
+  std::string sensor;
+  std::size_t frame_bytes = 0;      // the capture ring's slot: width x height x bytes per pixel
+  camera::CameraClockConfig clock;  // the live source's (devices::camera_clock_config)
+};
+
 struct LossSpan {
   std::string reason;         // "buffer full (disk too slow)", "write failed: No space left ..."
   std::int64_t first_ns = 0;  // recording time (the pcap's clock, UTC ns) of the first loss
@@ -98,7 +114,7 @@ struct FileStats {
   std::string sensor;
   std::filesystem::path file;
   std::vector<std::string> streams;
-  std::string unit = "packets";     // what `packets` counts: "packets", "frames" (CAN), "reads"
+  std::string unit = "packets";     // what `packets` counts: "packets", "frames", "reads"
   std::uint64_t packets = 0;        // datagrams (CAN frames, serial reads) written
   std::uint64_t payload_bytes = 0;  // their UDP payload (CAN data, serial) bytes
   std::uint64_t file_bytes = 0;     // the file's size
@@ -132,6 +148,9 @@ class Recorder {
   SpscRing<imu::CanRecord>& add_can_stream(const CanStreamSpec& spec);
   // Before start(): opens <sensor>.serial and writes its header; returns the tap of its reads.
   drivers::capture::PacketRing& add_serial_stream(const SerialStreamSpec& spec);
+  // Before start(): creates the folder <sensor>/ with data/ and data.csv; returns the tap of its
+  // frames (memory: up to stream_buffer_bytes, 4 to 64 frames).
+  camera::FrameRing& add_camera_stream(const CameraStreamSpec& spec);
 
   void start();
   // Drains every tap (call once the capture threads stopped), writes the last blocks, syncs and
@@ -148,6 +167,8 @@ class Recorder {
 
  private:
   struct File;
+  struct CameraFolder;
+  bool turn_cameras(HostTime now, bool final);
   File& new_file(const std::string& sensor, const std::string& extension, RecordedFormat format);
   void run(const std::stop_token& stop);
   bool turn(HostTime now, bool final);
@@ -156,6 +177,7 @@ class Recorder {
   RecorderOptions options_;
   std::int64_t realtime_offset_ns_ = 0;
   std::vector<std::unique_ptr<File>> files_;
+  std::vector<std::unique_ptr<CameraFolder>> cameras_;
   runtime::Heartbeat heartbeat_;
   mutable std::mutex stats_mutex_;
   std::vector<FileStats> stats_;

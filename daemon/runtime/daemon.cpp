@@ -77,7 +77,7 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
       in.sensor_index = i;
       in.origin = device_origin(s, *device);
       in.source = sensor_kind(s.driver) == SensorKind::camera
-                      ? open_live_camera(s, config, &wake)
+                      ? open_live_camera(s, config, &wake, recorder)
                       : open_live_imu(s, config, &wake, recorder);
       out.inputs.push_back(std::move(in));
       continue;
