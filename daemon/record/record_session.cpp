@@ -102,13 +102,13 @@ std::vector<ConfigProblem> record_problems(const LivodConfig& config) {
     }
     const auto* udp = std::get_if<UdpSourceConfig>(&s.source);
     if (udp == nullptr) continue;  // the configuration checks report it
-    if (s.driver == Driver::ouster && s.metadata.empty()) {
+    if (s.driver == Driver::ouster && s.metadata.empty() && udp->sensor_address.empty()) {
+      // Live, the metadata comes from the sensor's HTTP API; the recording keeps it.
       out.push_back(not_implemented(
           i, s,
-          "an Ouster recording replays only with its metadata, and fetching it from the sensor "
-          "for the recording is not implemented: save it once (curl http://" +
-              (udp->sensor_address.empty() ? std::string("SENSOR") : udp->sensor_address) +
-              "/api/v1/sensor/metadata > " + s.name + ".json) and set `metadata:`"));
+          "an Ouster recording replays only with its metadata: set `metadata:` (a saved file) or "
+          "source.udp.sensor_address (livod fetches it from the sensor and saves it as " +
+              s.name + ".json)"));
       continue;
     }
     // The replay of the recording filters the pcap on the driver's default ports (a replay
@@ -174,7 +174,8 @@ std::string recorded_config_text(const LivodConfig& config) {
         if (YAML::Node camera = node["camera"]; camera && camera.IsMap()) camera["decimation"] = 1;
       }
       node["source"] = source;
-      if (!s.metadata.empty()) node["metadata"] = s.name + ".json";
+      // An Ouster without a metadata file: the recorder saves what it fetches from the sensor.
+      if (!s.metadata.empty() || s.driver == Driver::ouster) node["metadata"] = s.name + ".json";
       if (!s.calibration.empty()) node["calibration"] = calibration_name(s);
       continue;
     }
@@ -235,6 +236,7 @@ std::vector<std::string> RecordSession::finish() {
     text += "  streams:";
     for (const auto& stream : s.streams) text += " " + stream;
     text += "\n";
+    for (const auto& note : s.notes) text += "  " + note + "\n";
     if (s.first_ns != 0) {
       text += "  records from " + utc_text(s.first_ns) + " to " + utc_text(s.last_ns) + "\n";
     }

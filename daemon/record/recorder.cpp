@@ -15,6 +15,7 @@
 #include "io/block_file.hpp"
 #include "io/candump.hpp"
 #include "io/euroc_writer.hpp"
+#include "io/output_file.hpp"
 #include "io/pcap_records.hpp"
 #include "io/serial_capture.hpp"
 
@@ -236,6 +237,49 @@ camera::FrameRing& Recorder::add_camera_stream(const CameraStreamSpec& spec) {
   return cameras_.back()->tap;
 }
 
+void Recorder::expect_metadata(const std::string& sensor) {
+  if (started_) throw Error("Recorder: metadata must be expected before start()");
+  metadata_.push_back({sensor, "", 0});
+}
+
+void Recorder::save_metadata(const std::string& sensor, std::string json) {
+  const std::lock_guard lock(metadata_mutex_);
+  metadata_queue_.emplace_back(sensor, std::move(json));
+}
+
+bool Recorder::write_metadata() {
+  std::vector<std::pair<std::string, std::string>> queued;
+  {
+    const std::lock_guard lock(metadata_mutex_);
+    queued.swap(metadata_queue_);
+  }
+  for (auto& [sensor, json] : queued) {
+    auto m = std::find_if(metadata_.begin(), metadata_.end(),
+                          [&](const Metadata& x) { return x.sensor == sensor; });
+    if (m == metadata_.end() || json == m->last_json) continue;  // unexpected, or unchanged
+    const std::string name = m->written == 0
+                                 ? sensor + ".json"
+                                 : sensor + ".reinit-" + std::to_string(m->written) + ".json";
+    std::string note;
+    try {
+      io::write_file(options_.dir / name, json);
+      note = m->written == 0 ? name + ": the metadata fetched from the sensor"
+                             : name + ": the metadata after the sensor re-initialised (" + sensor +
+                                   ".json describes the packets before it)";
+      if (m->written > 0) spdlog::warn("record: {}", note);
+      m->last_json = std::move(json);
+      ++m->written;
+    } catch (const std::exception& e) {
+      note = name + ": not written: " + e.what();
+      spdlog::error("record: {}", note);
+    }
+    for (auto& f : files_) {
+      if (f->stats.sensor == sensor) f->stats.notes.push_back(note);
+    }
+  }
+  return !queued.empty();
+}
+
 void Recorder::start() {
   if (started_) return;
   started_ = true;
@@ -387,6 +431,7 @@ bool Recorder::turn(HostTime now, bool final) {
     }
   }
   if (turn_cameras(now, final)) did = true;
+  if (write_metadata()) did = true;
   return did;
 }
 
@@ -485,6 +530,17 @@ std::vector<std::string> Recorder::stop() {
     if (const int err = f->out.close(); err != 0) {
       f->stats.last_error = std::strerror(err);
       problems.push_back("record: " + f->stats.file.string() + ": closing: " + std::strerror(err));
+    }
+  }
+  for (const Metadata& m : metadata_) {
+    if (m.written == 0) {
+      const std::string note = m.sensor +
+                               ".json: the sensor's metadata was never fetched (is it reachable "
+                               "over HTTP?): the pcap replays only with it";
+      problems.push_back("record: " + note);
+      for (auto& f : files_) {
+        if (f->stats.sensor == m.sensor) f->stats.notes.push_back(note);
+      }
     }
   }
   publish_stats();

@@ -29,6 +29,8 @@
 // USB IMUs as livod serial captures (io/serial_capture.hpp: every read as the host read it, with
 // its receive time in ns); both with the same blocks, record times (UTC by the one offset) and
 // loss accounting as the pcaps, so a replay merges all the recording's files on one timeline.
+// An Ouster without a metadata file: the JSON its live source fetched from the sensor is written
+// as <sensor>.json (save_metadata(), any thread; written on the recorder thread).
 // Cameras are recorded as EuRoC/ASL folders (io/euroc_writer.hpp: lossless PNG per frame,
 // data.csv with the exposure): the recorder thread maps each frame through its own CameraClock
 // (the same configuration and the same frames as the live source's) and names it by its
@@ -126,6 +128,7 @@ struct FileStats {
   std::uint64_t lost_invalid = 0;  // a record the file's format cannot hold (never seen live)
   std::vector<LossSpan> losses;    // in time order; consecutive losses of one reason merged
   std::string last_error;          // the last write error ("No space left on device"), or empty
+  std::vector<std::string> notes;  // e.g. the sensor metadata saved beside the file
   [[nodiscard]] std::uint64_t lost() const {
     return lost_buffer_full + lost_write_failed + lost_truncated + lost_invalid;
   }
@@ -152,6 +155,14 @@ class Recorder {
   // frames (memory: up to stream_buffer_bytes, 4 to 64 frames).
   camera::FrameRing& add_camera_stream(const CameraStreamSpec& spec);
 
+  // Before start(): the Ouster `sensor` has no metadata file; its metadata, fetched from the
+  // sensor, is to be saved as <sensor>.json (save_metadata). stop() reports it if it never came.
+  void expect_metadata(const std::string& sensor);
+  // Any thread (the metadata fetcher's): queues the JSON for the recorder thread, which writes the
+  // first as <sensor>.json and any later different one (a re-initialised sensor) as
+  // <sensor>.reinit-<n>.json, noting it in the pcap's stats. Never blocks on the disk.
+  void save_metadata(const std::string& sensor, std::string json);
+
   void start();
   // Drains every tap (call once the capture threads stopped), writes the last blocks, syncs and
   // closes the files, joins the thread. Returns what went wrong (losses, errors), one line each.
@@ -169,6 +180,7 @@ class Recorder {
   struct File;
   struct CameraFolder;
   bool turn_cameras(HostTime now, bool final);
+  bool write_metadata();
   File& new_file(const std::string& sensor, const std::string& extension, RecordedFormat format);
   void run(const std::stop_token& stop);
   bool turn(HostTime now, bool final);
@@ -179,6 +191,14 @@ class Recorder {
   std::vector<std::unique_ptr<File>> files_;
   std::vector<std::unique_ptr<CameraFolder>> cameras_;
   runtime::Heartbeat heartbeat_;
+  struct Metadata {
+    std::string sensor;
+    std::string last_json;  // the newest written
+    int written = 0;
+  };
+  std::vector<Metadata> metadata_;  // recorder thread (after start())
+  std::mutex metadata_mutex_;
+  std::vector<std::pair<std::string, std::string>> metadata_queue_;  // guarded: (sensor, json)
   mutable std::mutex stats_mutex_;
   std::vector<FileStats> stats_;
   bool started_ = false;

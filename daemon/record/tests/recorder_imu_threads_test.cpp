@@ -19,6 +19,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <variant>
@@ -100,7 +101,8 @@ void expect_same_samples(const std::vector<ImuSample>& live, const std::vector<I
   }
 }
 
-// Socketpairs handed out as the CAN interface; the test writes frames into the peer end.
+// Socketpairs handed out as the CAN interface (opened by the capture thread); the test writes
+// frames into the peer end.
 class FakeBus {
  public:
   ~FakeBus() {
@@ -109,15 +111,19 @@ class FakeBus {
   imu::CanSocket open() {
     int fds[2];
     if (::socketpair(AF_UNIX, SOCK_SEQPACKET, 0, fds) != 0) throw Error("socketpair failed");
+    const std::lock_guard lock(mutex_);
+    if (peer_ >= 0) ::close(peer_);
     peer_ = fds[1];
     return imu::CanSocket::adopt(fds[0], "can0");
   }
-  void send(const imu::CanRecord& r) const {
+  void send(const imu::CanRecord& r) {
     const auto b = imu::serialize_can_frame(r);
+    const std::lock_guard lock(mutex_);
     ASSERT_EQ(::write(peer_, b.data(), b.size()), static_cast<ssize_t>(b.size()));
   }
 
  private:
+  std::mutex mutex_;
   int peer_ = -1;
 };
 

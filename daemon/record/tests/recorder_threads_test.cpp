@@ -202,7 +202,7 @@ TEST(RecordSession, SensorsThatCannotBeRecordedAreNotImplementedErrors) {
   std::ofstream(config_path)
       << "body_frame: os1.imu\nsensors:\n"
       << "  - name: os1\n    driver: ouster\n    model: OS1-64\n"
-      << "    source: {udp: {sensor_address: 192.168.1.20}}\n"
+      << "    source: {udp: {}}\n"  // no metadata file and nowhere to fetch it from
       << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
       << "  - name: hdl\n    driver: velodyne\n    model: VLP-16\n"
       << "    source: {udp: {ports: {lidar: 2370}}}\n"
