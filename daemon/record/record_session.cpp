@@ -8,6 +8,8 @@
 #include <set>
 #include <variant>
 
+#include <spdlog/spdlog.h>
+
 #include "core/error.hpp"
 #include "daemon/replay/decoder_factory.hpp"
 #include "io/output_file.hpp"
@@ -146,7 +148,8 @@ std::vector<std::pair<std::filesystem::path, std::string>> recorded_files(
   return out;
 }
 
-std::string recorded_config_text(const LivodConfig& config) {
+std::string recorded_config_text(const LivodConfig& config,
+                                 const std::vector<std::string>& not_recorded) {
   if (config.source_file.empty()) {
     throw Error("a recording rewrites the configuration file: load it from a file");
   }
@@ -159,7 +162,10 @@ std::string recorded_config_text(const LivodConfig& config) {
                                  [&](const SensorConfig& s) { return s.name == name; });
     if (it == config.sensors.end()) continue;
     const SensorConfig& s = *it;
-    if (is_recorded(s)) {
+    const bool left_out =
+        std::find(not_recorded.begin(), not_recorded.end(), s.name) != not_recorded.end();
+    if (left_out) node["enabled"] = false;  // no file holds it: the replay must not look for one
+    if (is_recorded(s) && !left_out) {
       YAML::Node source;
       source["replay"]["file"] = recorded_file_name(s);
       if (sensor_kind(s.driver) == SensorKind::camera) {
@@ -221,6 +227,15 @@ RecordSession::RecordSession(const LivodConfig& config, std::filesystem::path di
     if (ec) throw Error("cannot copy " + from.string() + " into the recording: " + ec.message());
   }
   io::write_file(dir_ / "config.yaml", recorded_config_text(config));
+  config_ = config;
+}
+
+void RecordSession::leave_out(const std::string& sensor, const std::string& reason) {
+  if (recorder_.started()) throw Error("RecordSession: sensors are left out before start()");
+  spdlog::warn("record: sensor '{}' is not recorded: {} (`livod record` records it)", sensor,
+               reason);
+  left_out_.push_back(sensor);
+  io::write_file(dir_ / "config.yaml", recorded_config_text(config_, left_out_));
 }
 
 std::vector<std::string> RecordSession::finish() {

@@ -44,6 +44,10 @@ class RecordSession {
   RecordSession(const LivodConfig& config, std::filesystem::path dir, RecorderOptions options = {});
 
   [[nodiscard]] Recorder& recorder() { return recorder_; }
+  // Before start(): the sensor is not opened (`livod run` opens only what the estimator uses,
+  // e.g. no camera with estimator.vio disabled): it is logged and written `enabled: false` into
+  // config.yaml, so that the replay does not look for a file the recording does not hold.
+  void leave_out(const std::string& sensor, const std::string& reason);
   void start() { recorder_.start(); }
   // Stops the recorder (after the capture threads stopped), writes recording.txt. Returns the
   // losses and errors, one line each. Idempotent.
@@ -53,6 +57,8 @@ class RecordSession {
 
  private:
   std::filesystem::path dir_;
+  LivodConfig config_;
+  std::vector<std::string> left_out_;
   Recorder recorder_;
   HostTime started_;
   bool finished_ = false;
@@ -62,7 +68,9 @@ class RecordSession {
 // of every recorded sensor replaced by its file, its `metadata` / `calibration` pointing at the
 // copies recorded_files() names, other sensors' file references made absolute, `outputs.record`
 // and the output files removed (a replay writes into its -o folder). Comments are not kept.
-std::string recorded_config_text(const LivodConfig& config);
+// `not_recorded` sensors are written `enabled: false` (RecordSession::leave_out).
+std::string recorded_config_text(const LivodConfig& config,
+                                 const std::vector<std::string>& not_recorded = {});
 
 // The files of a recording besides the data: (original, name in DIR) for every recorded sensor's
 // metadata and calibration.

@@ -173,6 +173,7 @@ class Recorder {
   [[nodiscard]] std::vector<FileStats> stats() const;
   [[nodiscard]] const runtime::Heartbeat& heartbeat() const { return heartbeat_; }
   [[nodiscard]] const std::filesystem::path& dir() const { return options_.dir; }
+  [[nodiscard]] bool started() const { return started_; }
   // UTC = monotonic + this (the offset every record time uses).
   [[nodiscard]] std::int64_t realtime_offset_ns() const { return realtime_offset_ns_; }
 

@@ -196,6 +196,49 @@ TEST(RecordSession, WritesAConfigurationThatReplaysTheRecordingAndRefusesToOverw
   EXPECT_NE(new_recording_folder(dir / "rec"), first);
 }
 
+// `livod run` opens only the sensors the estimator uses (no camera with the visual update off):
+// one it leaves out is disabled in the recording's configuration, which then loads without
+// looking for a file the recording does not hold.
+TEST(RecordSession, ASensorLeftOutIsDisabledInTheRecordedConfiguration) {
+  const auto dir = test::temp_dir("record-left-out");
+  std::filesystem::remove_all(dir / "rec");
+  const auto config_path = dir / "live.yaml";
+  std::ofstream(config_path) << "body_frame: hdl.imu\nsensors:\n"
+                             << "  - name: hdl\n    driver: velodyne\n    model: HDL-32E\n"
+                             << "    source: {udp: {bind_address: 127.0.0.1}}\n"
+                             << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, "
+                                "0, 0]}}\n"
+                             << "  - name: cam\n    driver: v4l2\n"
+                             << "    source: {device: {path: /dev/video0}}\n"
+                             << "    camera: {width: 640, height: 480, intrinsics: [500, 500, "
+                                "320, 240]}\n"
+                             << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, "
+                                "0, 0]}}\n"
+                             << "estimator: {vio: {enabled: false}}\n";
+  const ConfigResult loaded = load_config(config_path);
+  ASSERT_TRUE(loaded.ok());
+  EXPECT_TRUE(record_problems(loaded.config).empty());
+  {
+    RecordSession session(loaded.config, dir / "rec");
+    session.recorder().add_packet_stream({"hdl", "lidar", 1206, 0});
+    session.leave_out("cam", "not used");
+    session.start();
+    EXPECT_THROW(session.leave_out("cam", "too late"), livod::Error);
+    EXPECT_TRUE(session.finish().empty());
+  }
+  const ConfigResult recorded = load_config(dir / "rec" / "config.yaml");
+  for (const auto& p : recorded.problems) {
+    EXPECT_NE(p.severity, Severity::error) << format_problem(recorded.source, p);
+  }
+  const SensorConfig* cam = recorded.config.find_sensor("cam");
+  ASSERT_NE(cam, nullptr);
+  EXPECT_FALSE(cam->enabled);
+  EXPECT_TRUE(std::holds_alternative<DeviceSourceConfig>(cam->source));
+  EXPECT_FALSE(std::filesystem::exists(dir / "rec" / "cam"));
+  EXPECT_TRUE(
+      std::holds_alternative<ReplaySourceConfig>(recorded.config.find_sensor("hdl")->source));
+}
+
 TEST(RecordSession, SensorsThatCannotBeRecordedAreNotImplementedErrors) {
   const auto dir = test::temp_dir("record-problems");
   const auto config_path = dir / "live.yaml";
