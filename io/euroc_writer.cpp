@@ -29,9 +29,22 @@ void EurocCameraWriter::write(SensorTime timestamp, const cv::Mat& image,
   const std::string file = std::to_string(timestamp.ns) + ".png";
   const auto path = folder_ / "data" / file;
   // Fastest zlib level: lossless anyway, and recording must keep up with the camera.
-  if (!cv::imwrite(path.string(), image, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
-    throw Error("cannot write image " + path.string());
+  bool written = false;
+  std::string why;
+  try {
+    written = cv::imwrite(path.string(), image, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  } catch (const cv::Exception& e) {
+    why = std::string(": ") + e.what();
   }
+  if (!written) {
+    // A partial file (disk full) is no frame: data.csv never names it, and it goes.
+    std::error_code ec;
+    std::filesystem::remove(path, ec);
+    throw Error("cannot write image " + path.string() + why);
+  }
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec) bytes_ += size;
   // Every row has the exposure column (the reader fixes the column count by the first row); 0 is
   // "unknown".
   csv_ << timestamp.ns << ',' << file << ',' << exposure.value_or(Nanoseconds(0)).count() << '\n';

@@ -7,8 +7,9 @@
 // The timestamp is the frame's time on the common timeline (livod uses mid-exposure); the third
 // column is livod's extension (exposure duration, ns; 0 when unknown), read back by
 // parse_euroc_camera_csv.
-// For `livod record` once `livod run` runs cameras (docs/record.md); the writer allocates (PNG
-// encoding) and belongs on the IO thread.
+// `livod record` writes its camera folders with it on the recorder thread (docs/record.md): the
+// writer allocates (PNG encoding) and belongs on an IO thread, never a capture thread. A frame
+// whose PNG cannot be written throws and leaves no file; data.csv names only written frames.
 
 #include <cstdint>
 #include <filesystem>
@@ -34,12 +35,15 @@ class EurocCameraWriter {
   void flush();
 
   [[nodiscard]] std::uint64_t frames() const { return frames_; }
+  // The PNG files' bytes written so far.
+  [[nodiscard]] std::uint64_t bytes() const { return bytes_; }
 
  private:
   std::filesystem::path folder_;
   std::ofstream csv_;
   std::optional<SensorTime> last_;
   std::uint64_t frames_ = 0;
+  std::uint64_t bytes_ = 0;
 };
 
 // sensor.yaml in the EuRoC layout (T_BS, rate, resolution, pinhole intrinsics, distortion).

@@ -14,6 +14,7 @@ constexpr std::array<char, 8> kMagic{'L', 'V', 'S', 'E', 'R', 'C', 'A', 'P'};
 constexpr std::uint32_t kVersion = 1;
 constexpr std::size_t kHeaderBytes = 16;
 constexpr std::size_t kRecordHeaderBytes = 12;
+static_assert(serial_record_bytes(0) == kRecordHeaderBytes);
 
 std::uint64_t le(const unsigned char* p, int n) {
   std::uint64_t v = 0;
@@ -25,7 +26,32 @@ void put_le(std::ostream& out, std::uint64_t v, int n) {
   for (int i = 0; i < n; ++i) out.put(static_cast<char>((v >> (8 * i)) & 0xFF));
 }
 
+void put_le(std::vector<std::byte>& out, std::uint64_t v, int n) {
+  for (int i = 0; i < n; ++i) out.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFF));
+}
+
 }  // namespace
+
+std::vector<std::byte> serial_capture_header() {
+  std::vector<std::byte> out;
+  out.reserve(kHeaderBytes);
+  for (const char c : kMagic) out.push_back(static_cast<std::byte>(c));
+  put_le(out, kVersion, 4);
+  put_le(out, 0, 4);
+  return out;
+}
+
+void append_serial_record(std::vector<std::byte>& out, std::int64_t rx_time_ns,
+                          std::span<const std::byte> bytes) {
+  if (bytes.empty() || bytes.size() > SerialCaptureReader::kMaxChunkBytes) {
+    throw std::invalid_argument("serial capture chunk of " + std::to_string(bytes.size()) +
+                                " bytes: the format takes 1 to " +
+                                std::to_string(SerialCaptureReader::kMaxChunkBytes));
+  }
+  put_le(out, static_cast<std::uint64_t>(rx_time_ns), 8);
+  put_le(out, bytes.size(), 4);
+  out.insert(out.end(), bytes.begin(), bytes.end());
+}
 
 struct SerialCaptureReader::Impl {
   std::string name;

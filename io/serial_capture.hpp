@@ -1,8 +1,9 @@
 #pragma once
 // livod serial capture: the bytes a serial / USB IMU sent, in the chunks the host read them, each
 // with its receive time, so that a recorded stream replays through a StreamImuDecoder exactly as
-// the live reads did (torn messages included). The simulator writes it; `livod record` is to write
-// it from the live source once `livod run` runs serial IMUs (docs/record.md).
+// the live reads did (torn messages included). The simulator writes it (SerialCaptureWriter);
+// `livod record` writes it from the live source's reads (serial_capture_header() and
+// append_serial_record() into its blocks, daemon/record/recorder.hpp).
 //
 // Layout (all little-endian):
 //   header  8 bytes  "LVSERCAP"
@@ -31,6 +32,16 @@ struct SerialChunk {
   std::int64_t rx_time_ns = 0;
   std::vector<std::byte> bytes;  // capacity reused by the reader
 };
+
+// The file header (16 bytes), and one record appended to `out`: what SerialCaptureWriter writes,
+// for writers that collect records into blocks of their own. append_serial_record() throws
+// std::invalid_argument for an empty read or one above SerialCaptureReader::kMaxChunkBytes.
+[[nodiscard]] std::vector<std::byte> serial_capture_header();
+[[nodiscard]] constexpr std::size_t serial_record_bytes(std::size_t bytes) {
+  return 12 + bytes;
+}
+void append_serial_record(std::vector<std::byte>& out, std::int64_t rx_time_ns,
+                          std::span<const std::byte> bytes);
 
 class SerialCaptureReader {
  public:

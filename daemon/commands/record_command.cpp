@@ -1,8 +1,9 @@
 // `livod record --config FILE -o DIR`: the configured live sensors' raw data into DIR, without
 // the estimator (docs/record.md). The same capture threads as `livod run` (one per UDP socket,
-// kernel receive times) feed the recorder's IO thread; the sensors are brought up and supervised
-// as in `livod run` (Livox handshake and heartbeats, Ouster re-init); their packets are decoded
-// only for health (rates, STALE, sequence gaps). Runs until SIGINT/SIGTERM or --max-duration.
+// kernel receive times; one per camera, CAN or serial IMU) feed the recorder's IO thread; the
+// sensors are brought up and supervised as in `livod run` (Livox handshake and heartbeats, Ouster
+// re-init); their packets are decoded only for health (rates, STALE, sequence gaps). Runs until
+// SIGINT/SIGTERM or --max-duration.
 //
 // Exit codes: 0 stopped with every file closed (losses are reported in the log and
 // DIR/recording.txt); 1 a configuration with errors or one that cannot be recorded (every
@@ -24,6 +25,8 @@
 #include "daemon/logging.hpp"
 #include "daemon/preflight.hpp"
 #include "daemon/record/record_session.hpp"
+#include "daemon/runtime/live_camera_source.hpp"
+#include "daemon/runtime/live_imu_source.hpp"
 #include "daemon/runtime/live_lidar_source.hpp"
 #include "daemon/runtime/signals.hpp"
 
@@ -42,7 +45,7 @@ struct RecordArgs {
 };
 
 // Decodes what the sources queued (for health: rates, gaps) and drops the results.
-void drain(std::vector<std::unique_ptr<runtime::LiveLidarSource>>& sources,
+void drain(std::vector<std::unique_ptr<runtime::MeasurementSource>>& sources,
            const drivers::DecoderSinks& sinks, HostTime now) {
   for (auto& s : sources) {
     while (s->peek_time()) s->deliver(sinks);
@@ -77,9 +80,18 @@ int run_record(const RecordArgs& args, const CLI::App& root) {
     if (config.realtime.capture_cpu >= 0) lo.capture_cpu = config.realtime.capture_cpu;
     lo.stale_after = from_seconds(config.health.stale_after_s);
     lo.recorder = &session.recorder();
-    std::vector<std::unique_ptr<runtime::LiveLidarSource>> sources;
+    std::vector<std::unique_ptr<runtime::MeasurementSource>> sources;
     for (const SensorConfig& s : config.sensors) {
-      if (record::is_recorded(s)) sources.push_back(runtime::open_live_lidar(s, lo));
+      if (!record::is_recorded(s)) continue;
+      if (is_packet_lidar(s.driver)) {
+        sources.push_back(runtime::open_live_lidar(s, lo));
+      } else if (sensor_kind(s.driver) == SensorKind::camera) {
+        // A camera or IMU that is not there yet is waited for (reported, retried every second),
+        // as in `livod run`.
+        sources.push_back(runtime::open_live_camera(s, config, nullptr, &session.recorder()));
+      } else {
+        sources.push_back(runtime::open_live_imu(s, config, nullptr, &session.recorder()));
+      }
     }
     session.start();
     spdlog::info("livod record: {} sensor(s) into {}; ready", sources.size(),
@@ -150,7 +162,8 @@ void add_record_command(CLI::App& app, CommandContext& ctx) {
   auto args = std::make_shared<RecordArgs>();
   auto* cmd = app.add_subcommand(
       "record",
-      "Record the configured live sensors' raw data (pcap per LiDAR) and a replayable "
+      "Record the configured live sensors' raw data (pcap per LiDAR, candump log per CAN IMU, "
+      "serial capture per serial IMU, EuRoC folder per camera) and a replayable "
       "configuration into a folder, until SIGINT/SIGTERM");
   cmd->add_option("--config", args->config, "The YAML configuration (its live sensors)")
       ->required()

@@ -1,5 +1,6 @@
 #include "daemon/devices/device_sources.hpp"
 
+#include <algorithm>
 #include <variant>
 
 #include "core/error.hpp"
@@ -68,6 +69,13 @@ camera::CameraClockConfig camera_clock_config(const SensorConfig& sensor) {
   return c;
 }
 
+std::size_t camera_frame_bytes(const SensorConfig& sensor) {
+  return static_cast<std::size_t>(std::max(sensor.camera.width, 1)) *
+         static_cast<std::size_t>(std::max(sensor.camera.height, 1)) *
+         static_cast<std::size_t>(
+             camera::bytes_per_pixel(pixel_format(sensor.camera.pixel_format)));
+}
+
 std::unique_ptr<camera::CameraSource> open_camera_source(const SensorConfig& sensor,
                                                          const LivodConfig& config,
                                                          const DeviceOpenOptions& options) {
@@ -80,6 +88,7 @@ std::unique_ptr<camera::CameraSource> open_camera_source(const SensorConfig& sen
   sc.format = pixel_format(cam.pixel_format);
   sc.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity);
   sc.decimation = cam.decimation;
+  sc.tap = options.camera_tap;
   sc.clock = camera_clock_config(sensor);
   sc.thread = thread_config("cam:", sensor, config, options);
   sc.stale_after = stale_after(config);
@@ -154,6 +163,7 @@ std::unique_ptr<imu::CanImuSource> open_can_imu_source(const SensorConfig& senso
   c.socket.fd_frames = sensor.can.fd_frames;
   // ring_capacity counts samples; a sample takes up to three frames.
   c.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity) * 3;
+  c.tap = options.can_tap;
   c.thread = thread_config("can:", sensor, config, options);
   c.timing.stale_after = stale_after(config);
   auto decoder = make_can_imu_decoder(sensor.can, sensor.name);
@@ -169,6 +179,8 @@ std::unique_ptr<imu::SerialImuSource> open_serial_imu_source(const SensorConfig&
   c.path = device.path;
   c.baud_rate = sensor.serial.baud_rate;
   c.ring_capacity = static_cast<std::size_t>(sensor.ring_capacity);
+  c.chunk_bytes = kSerialChunkBytes;
+  c.tap = options.serial_tap;
   c.thread = thread_config("imu:", sensor, config, options);
   c.timing.stale_after = stale_after(config);
   auto decoder = make_serial_imu_decoder(sensor.serial, sensor.name);

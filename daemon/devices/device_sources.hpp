@@ -33,7 +33,20 @@ struct DeviceOpenOptions {
   bool wait_for_device = false;
   // Rung by the capture thread when data arrives (wakes the scheduler). May be null.
   drivers::capture::Doorbell* doorbell = nullptr;
+  // Recording (`livod record`, outputs.record): the IMU's capture thread also copies what it
+  // queues into this tap (daemon/record/recorder.hpp). May be null. can_tap for can_imu,
+  // serial_tap (slots of at least kSerialChunkBytes) for serial_imu; camera_tap for cameras.
+  SpscRing<imu::CanRecord>* can_tap = nullptr;
+  drivers::capture::PacketRing* serial_tap = nullptr;
+  // For a camera: slots of at least width x height x bytes per pixel (camera_frame_bytes()).
+  camera::FrameRing* camera_tap = nullptr;
 };
+
+// The bytes of one frame of the sensor's configured size and pixel format (a ring slot).
+std::size_t camera_frame_bytes(const SensorConfig& sensor);
+
+// The largest read of a serial IMU's capture thread (the slot size of its rings).
+inline constexpr std::size_t kSerialChunkBytes = 4096;
 
 // The camera clock for a sensor: clock.mode auto lets the frames' clock decide (V4L2 monotonic
 // stamps: direct; GenICam ticks: free-running; PTP: direct), other modes force it; latency,

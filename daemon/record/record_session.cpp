@@ -8,6 +8,8 @@
 #include <set>
 #include <variant>
 
+#include <spdlog/spdlog.h>
+
 #include "core/error.hpp"
 #include "daemon/replay/decoder_factory.hpp"
 #include "io/output_file.hpp"
@@ -62,8 +64,20 @@ std::filesystem::path new_recording_folder(const std::filesystem::path& parent) 
 }
 
 bool is_recorded(const SensorConfig& sensor) {
-  return sensor.enabled && is_packet_lidar(sensor.driver) &&
-         std::holds_alternative<UdpSourceConfig>(sensor.source);
+  if (!sensor.enabled) return false;
+  if (is_packet_lidar(sensor.driver)) return std::holds_alternative<UdpSourceConfig>(sensor.source);
+  if (sensor.driver == Driver::can_imu || sensor.driver == Driver::serial_imu ||
+      sensor.driver == Driver::v4l2 || sensor.driver == Driver::aravis) {
+    return std::holds_alternative<DeviceSourceConfig>(sensor.source);
+  }
+  return false;
+}
+
+std::string recorded_file_name(const SensorConfig& sensor) {
+  if (sensor.driver == Driver::can_imu) return sensor.name + ".log";
+  if (sensor.driver == Driver::serial_imu) return sensor.name + ".serial";
+  if (sensor.driver == Driver::v4l2 || sensor.driver == Driver::aravis) return sensor.name;
+  return sensor.name + ".pcap";
 }
 
 std::vector<ConfigProblem> record_problems(const LivodConfig& config) {
@@ -76,23 +90,27 @@ std::vector<ConfigProblem> record_problems(const LivodConfig& config) {
           i, s, "it replays a recording: a recording is made from live sensors (copy the file)"));
       continue;
     }
+    if (s.driver == Driver::can_imu || s.driver == Driver::serial_imu || s.driver == Driver::v4l2 ||
+        s.driver == Driver::aravis) {
+      continue;  // a device source (the configuration checks report any other)
+    }
     if (!is_packet_lidar(s.driver)) {
       out.push_back(not_implemented(
           i, s,
-          "only packet LiDARs over UDP are recorded today; cameras (EuRoC folders), CAN IMUs "
-          "(candump logs) and serial IMUs (serial captures) are not (disable the sensor to "
-          "record the others)"));
+          "livod records live packet LiDARs over UDP, cameras (EuRoC folders), CAN IMUs "
+          "(candump logs) and serial IMUs (serial captures); this is none of them (disable the "
+          "sensor to record the others)"));
       continue;
     }
     const auto* udp = std::get_if<UdpSourceConfig>(&s.source);
     if (udp == nullptr) continue;  // the configuration checks report it
-    if (s.driver == Driver::ouster && s.metadata.empty()) {
+    if (s.driver == Driver::ouster && s.metadata.empty() && udp->sensor_address.empty()) {
+      // Live, the metadata comes from the sensor's HTTP API; the recording keeps it.
       out.push_back(not_implemented(
           i, s,
-          "an Ouster recording replays only with its metadata, and fetching it from the sensor "
-          "for the recording is not implemented: save it once (curl http://" +
-              (udp->sensor_address.empty() ? std::string("SENSOR") : udp->sensor_address) +
-              "/api/v1/sensor/metadata > " + s.name + ".json) and set `metadata:`"));
+          "an Ouster recording replays only with its metadata: set `metadata:` (a saved file) or "
+          "source.udp.sensor_address (livod fetches it from the sensor and saves it as " +
+              s.name + ".json)"));
       continue;
     }
     // The replay of the recording filters the pcap on the driver's default ports (a replay
@@ -130,7 +148,8 @@ std::vector<std::pair<std::filesystem::path, std::string>> recorded_files(
   return out;
 }
 
-std::string recorded_config_text(const LivodConfig& config) {
+std::string recorded_config_text(const LivodConfig& config,
+                                 const std::vector<std::string>& not_recorded) {
   if (config.source_file.empty()) {
     throw Error("a recording rewrites the configuration file: load it from a file");
   }
@@ -143,11 +162,26 @@ std::string recorded_config_text(const LivodConfig& config) {
                                  [&](const SensorConfig& s) { return s.name == name; });
     if (it == config.sensors.end()) continue;
     const SensorConfig& s = *it;
-    if (is_recorded(s)) {
+    const bool left_out =
+        std::find(not_recorded.begin(), not_recorded.end(), s.name) != not_recorded.end();
+    if (left_out) node["enabled"] = false;  // no file holds it: the replay must not look for one
+    if (is_recorded(s) && !left_out) {
       YAML::Node source;
-      source["replay"]["file"] = s.name + ".pcap";
+      source["replay"]["file"] = recorded_file_name(s);
+      if (sensor_kind(s.driver) == SensorKind::camera) {
+        // The folder's times are the live mid-exposure times on the common timeline (the camera
+        // clock and time_offset_s applied) of the frames the capture thread kept (decimation
+        // applied): the replay takes them as they are.
+        source["replay"]["format"] = "euroc";
+        YAML::Node clock;
+        clock["mode"] = "direct";
+        node["clock"] = clock;
+        node["time_offset_s"] = 0.0;
+        if (YAML::Node camera = node["camera"]; camera && camera.IsMap()) camera["decimation"] = 1;
+      }
       node["source"] = source;
-      if (!s.metadata.empty()) node["metadata"] = s.name + ".json";
+      // An Ouster without a metadata file: the recorder saves what it fetches from the sensor.
+      if (!s.metadata.empty() || s.driver == Driver::ouster) node["metadata"] = s.name + ".json";
       if (!s.calibration.empty()) node["calibration"] = calibration_name(s);
       continue;
     }
@@ -193,6 +227,15 @@ RecordSession::RecordSession(const LivodConfig& config, std::filesystem::path di
     if (ec) throw Error("cannot copy " + from.string() + " into the recording: " + ec.message());
   }
   io::write_file(dir_ / "config.yaml", recorded_config_text(config));
+  config_ = config;
+}
+
+void RecordSession::leave_out(const std::string& sensor, const std::string& reason) {
+  if (recorder_.started()) throw Error("RecordSession: sensors are left out before start()");
+  spdlog::warn("record: sensor '{}' is not recorded: {} (`livod record` records it)", sensor,
+               reason);
+  left_out_.push_back(sensor);
+  io::write_file(dir_ / "config.yaml", recorded_config_text(config_, left_out_));
 }
 
 std::vector<std::string> RecordSession::finish() {
@@ -208,12 +251,13 @@ std::vector<std::string> RecordSession::finish() {
     text += "  streams:";
     for (const auto& stream : s.streams) text += " " + stream;
     text += "\n";
+    for (const auto& note : s.notes) text += "  " + note + "\n";
     if (s.first_ns != 0) {
       text += "  records from " + utc_text(s.first_ns) + " to " + utc_text(s.last_ns) + "\n";
     }
     for (const LossSpan& l : s.losses) {
-      text += "  lost " + std::to_string(l.packets) + " packets from " + utc_text(l.first_ns) +
-              " to " + utc_text(l.last_ns) + ": " + l.reason + "\n";
+      text += "  lost " + std::to_string(l.packets) + " " + s.unit + " from " +
+              utc_text(l.first_ns) + " to " + utc_text(l.last_ns) + ": " + l.reason + "\n";
     }
   }
   try {

@@ -4,6 +4,9 @@
 //
 //   capture thread ──tap (PacketRing: bounded, full ⇒ drop + count)──▶ recorder thread
 //                                                                      ─▶ <sensor>.pcap (blocks)
+//   CAN IMU capture thread ──tap (SpscRing<CanRecord>)──▶ recorder thread ─▶ <sensor>.log
+//   serial IMU capture thread ──tap (PacketRing of reads)──▶ recorder thread ─▶ <sensor>.serial
+//   camera capture thread ──tap (FrameRing)──▶ recorder thread: camera clock, PNG ─▶ <sensor>/
 //
 // Each capture thread copies every datagram into a tap ring owned by the recorder, beside its own
 // ring to the scheduler (CaptureThreadConfig::tap). The recorder thread merges a LiDAR's streams
@@ -21,11 +24,21 @@
 //     `retry_period` (records arriving meanwhile are lost with the same reason);
 //   - truncated: a datagram longer than its slot (it would be a wrong packet in the file).
 //
-// Devices (cameras, CAN and serial IMUs) plug in as further kinds of recorded stream with their
-// own writers (io/euroc_writer.hpp, io/candump.hpp, io/serial_capture.hpp) and the same loss
-// accounting; only packet LiDARs are recorded today (record_plan.hpp refuses the rest).
+// CAN IMUs are recorded as candump logs (io/candump.hpp: `candump -l` lines, the frame's kernel
+// receive time at the format's microsecond resolution, the configured interface's name), serial /
+// USB IMUs as livod serial captures (io/serial_capture.hpp: every read as the host read it, with
+// its receive time in ns); both with the same blocks, record times (UTC by the one offset) and
+// loss accounting as the pcaps, so a replay merges all the recording's files on one timeline.
+// An Ouster without a metadata file: the JSON its live source fetched from the sensor is written
+// as <sensor>.json (save_metadata(), any thread; written on the recorder thread).
+// Cameras are recorded as EuRoC/ASL folders (io/euroc_writer.hpp: lossless PNG per frame,
+// data.csv with the exposure): the recorder thread maps each frame through its own CameraClock
+// (the same configuration and the same frames as the live source's) and names it by its
+// mid-exposure time on the common timeline, on the pcaps' UTC clock; it encodes the PNGs (never a
+// capture thread). data.csv is flushed with the same period as the blocks; a frame that cannot be
+// written (disk full) is lost and counted, the frames before it stay.
 //
-// Threads: add_packet_stream() and start() on the owning thread (packets a capture thread pushes
+// Threads: add_*_stream() and start() on the owning thread (packets a capture thread pushes
 // before start() wait in the tap); stop() after the capture threads stopped (it drains the taps);
 // stats() and heartbeat() from any thread.
 
@@ -38,9 +51,13 @@
 #include <thread>
 #include <vector>
 
+#include "core/spsc_ring.hpp"
 #include "core/time.hpp"
 #include "daemon/runtime/heartbeat.hpp"
+#include "drivers/camera/camera_clock.hpp"
+#include "drivers/camera/frame_ring.hpp"
 #include "drivers/capture/packet_ring.hpp"
+#include "drivers/imu/imu_decoder.hpp"
 
 namespace livod::daemon::record {
 
@@ -65,6 +82,28 @@ struct PacketStreamSpec {
   std::uint32_t dst_ip = 0;        // written as the frames' destination (host order; 0 unknown)
 };
 
+// The kinds of file a recording holds.
+enum class RecordedFormat : std::uint8_t { pcap, candump, serial };
+
+// A CAN IMU to record into `<sensor>.log` (a candump log).
+struct CanStreamSpec {
+  std::string sensor;
+  std::string interface;  // written in every line ("can0")
+};
+
+// A serial / USB IMU to record into `<sensor>.serial` (a livod serial capture).
+struct SerialStreamSpec {
+  std::string sensor;
+  std::size_t slot_bytes = 4096;  // the capture thread's largest read
+};
+
+// A camera to record into the EuRoC folder `<sensor>/` (data.csv, data/<ns>.png).
+struct CameraStreamSpec {
+  std::string sensor;
+  std::size_t frame_bytes = 0;      // the capture ring's slot: width x height x bytes per pixel
+  camera::CameraClockConfig clock;  // the live source's (devices::camera_clock_config)
+};
+
 struct LossSpan {
   std::string reason;         // "buffer full (disk too slow)", "write failed: No space left ..."
   std::int64_t first_ns = 0;  // recording time (the pcap's clock, UTC ns) of the first loss
@@ -77,18 +116,21 @@ struct FileStats {
   std::string sensor;
   std::filesystem::path file;
   std::vector<std::string> streams;
-  std::uint64_t packets = 0;        // datagrams written
-  std::uint64_t payload_bytes = 0;  // their UDP payload bytes
+  std::string unit = "packets";     // what `packets` counts: "packets", "frames", "reads"
+  std::uint64_t packets = 0;        // datagrams (CAN frames, serial reads) written
+  std::uint64_t payload_bytes = 0;  // their UDP payload (CAN data, serial) bytes
   std::uint64_t file_bytes = 0;     // the file's size
   std::int64_t first_ns = 0;        // first and last record time written (UTC ns); 0: none
   std::int64_t last_ns = 0;
   std::uint64_t lost_buffer_full = 0;
   std::uint64_t lost_write_failed = 0;
   std::uint64_t lost_truncated = 0;
-  std::vector<LossSpan> losses;  // in time order; consecutive losses of one reason merged
-  std::string last_error;        // the last write error ("No space left on device"), or empty
+  std::uint64_t lost_invalid = 0;  // a record the file's format cannot hold (never seen live)
+  std::vector<LossSpan> losses;    // in time order; consecutive losses of one reason merged
+  std::string last_error;          // the last write error ("No space left on device"), or empty
+  std::vector<std::string> notes;  // e.g. the sensor metadata saved beside the file
   [[nodiscard]] std::uint64_t lost() const {
-    return lost_buffer_full + lost_write_failed + lost_truncated;
+    return lost_buffer_full + lost_write_failed + lost_truncated + lost_invalid;
   }
 };
 
@@ -104,6 +146,22 @@ class Recorder {
   // livod::Error naming the file) and returns the tap ring the stream's capture thread pushes
   // into. The ring lives as long as the recorder.
   drivers::capture::PacketRing& add_packet_stream(const PacketStreamSpec& spec);
+  // Before start(): opens <sensor>.log (throws livod::Error naming the file, or for a second
+  // stream of the sensor) and returns the tap its CAN capture thread pushes into.
+  SpscRing<imu::CanRecord>& add_can_stream(const CanStreamSpec& spec);
+  // Before start(): opens <sensor>.serial and writes its header; returns the tap of its reads.
+  drivers::capture::PacketRing& add_serial_stream(const SerialStreamSpec& spec);
+  // Before start(): creates the folder <sensor>/ with data/ and data.csv; returns the tap of its
+  // frames (memory: up to stream_buffer_bytes, 4 to 64 frames).
+  camera::FrameRing& add_camera_stream(const CameraStreamSpec& spec);
+
+  // Before start(): the Ouster `sensor` has no metadata file; its metadata, fetched from the
+  // sensor, is to be saved as <sensor>.json (save_metadata). stop() reports it if it never came.
+  void expect_metadata(const std::string& sensor);
+  // Any thread (the metadata fetcher's): queues the JSON for the recorder thread, which writes the
+  // first as <sensor>.json and any later different one (a re-initialised sensor) as
+  // <sensor>.reinit-<n>.json, noting it in the pcap's stats. Never blocks on the disk.
+  void save_metadata(const std::string& sensor, std::string json);
 
   void start();
   // Drains every tap (call once the capture threads stopped), writes the last blocks, syncs and
@@ -115,11 +173,16 @@ class Recorder {
   [[nodiscard]] std::vector<FileStats> stats() const;
   [[nodiscard]] const runtime::Heartbeat& heartbeat() const { return heartbeat_; }
   [[nodiscard]] const std::filesystem::path& dir() const { return options_.dir; }
+  [[nodiscard]] bool started() const { return started_; }
   // UTC = monotonic + this (the offset every record time uses).
   [[nodiscard]] std::int64_t realtime_offset_ns() const { return realtime_offset_ns_; }
 
  private:
   struct File;
+  struct CameraFolder;
+  bool turn_cameras(HostTime now, bool final);
+  bool write_metadata();
+  File& new_file(const std::string& sensor, const std::string& extension, RecordedFormat format);
   void run(const std::stop_token& stop);
   bool turn(HostTime now, bool final);
   void publish_stats();
@@ -127,7 +190,16 @@ class Recorder {
   RecorderOptions options_;
   std::int64_t realtime_offset_ns_ = 0;
   std::vector<std::unique_ptr<File>> files_;
+  std::vector<std::unique_ptr<CameraFolder>> cameras_;
   runtime::Heartbeat heartbeat_;
+  struct Metadata {
+    std::string sensor;
+    std::string last_json;  // the newest written
+    int written = 0;
+  };
+  std::vector<Metadata> metadata_;  // recorder thread (after start())
+  std::mutex metadata_mutex_;
+  std::vector<std::pair<std::string, std::string>> metadata_queue_;  // guarded: (sensor, json)
   mutable std::mutex stats_mutex_;
   std::vector<FileStats> stats_;
   bool started_ = false;

@@ -76,8 +76,9 @@ OpenedSources open_live(const LivodConfig& config, const SensorRoles& roles,
       SensorInput in;
       in.sensor_index = i;
       in.origin = device_origin(s, *device);
-      in.source = sensor_kind(s.driver) == SensorKind::camera ? open_live_camera(s, config, &wake)
-                                                              : open_live_imu(s, config, &wake);
+      in.source = sensor_kind(s.driver) == SensorKind::camera
+                      ? open_live_camera(s, config, &wake, recorder)
+                      : open_live_imu(s, config, &wake, recorder);
       out.inputs.push_back(std::move(in));
       continue;
     }
@@ -180,6 +181,15 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
       options.paced_replay
           ? open_paced(config, roles, options, wake)
           : open_live(config, roles, options, wake, recording ? &recording->recorder() : nullptr);
+  if (recording) {
+    // open_live() opens only the sensors the estimator uses: the others are not recorded either.
+    for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+      if (!roles.unused_reason[i].empty() && record::is_recorded(config.sensors[i])) {
+        recording->leave_out(config.sensors[i].name,
+                             "`livod run` does not open it (" + roles.unused_reason[i] + ")");
+      }
+    }
+  }
 
   std::vector<SourceThread> source_threads;
   for (const auto& in : opened.inputs) {

@@ -5,6 +5,7 @@
 
 #include "core/image.hpp"
 #include "daemon/devices/device_sources.hpp"
+#include "daemon/record/recorder.hpp"
 
 namespace livod::daemon::runtime {
 namespace {
@@ -82,10 +83,15 @@ class LiveCamera final : public MeasurementSource {
 
 std::unique_ptr<MeasurementSource> open_live_camera(const SensorConfig& sensor,
                                                     const LivodConfig& config,
-                                                    drivers::capture::Doorbell* doorbell) {
+                                                    drivers::capture::Doorbell* doorbell,
+                                                    record::Recorder* recorder) {
   devices::DeviceOpenOptions options;
   options.wait_for_device = true;
   options.doorbell = doorbell;
+  if (recorder != nullptr) {
+    options.camera_tap = &recorder->add_camera_stream(
+        {sensor.name, devices::camera_frame_bytes(sensor), devices::camera_clock_config(sensor)});
+  }
   return std::make_unique<LiveCamera>(sensor, devices::open_camera_source(sensor, config, options));
 }
 

@@ -22,13 +22,20 @@
 #include "daemon/runtime/source.hpp"
 #include "drivers/capture/doorbell.hpp"
 
+namespace livod::daemon::record {
+class Recorder;
+}
+
 namespace livod::daemon::runtime {
 
 // Starts the camera's capture thread. Throws livod::Error naming the sensor only for what cannot
 // change by waiting (a driver that is not a camera, a V4L2 format livod cannot convert); a missing
 // or refusing device is waited for. `doorbell` (may be null) is rung when a frame arrives.
+// `recorder` (may be null; not started yet): the capture thread also copies every frame it keeps
+// into a tap of this recorder, which writes the EuRoC folder <sensor>/ (docs/record.md).
 std::unique_ptr<MeasurementSource> open_live_camera(const SensorConfig& sensor,
                                                     const LivodConfig& config,
-                                                    drivers::capture::Doorbell* doorbell);
+                                                    drivers::capture::Doorbell* doorbell,
+                                                    record::Recorder* recorder = nullptr);
 
 }  // namespace livod::daemon::runtime

@@ -3,8 +3,11 @@
 #include <fmt/core.h>
 #include <spdlog/spdlog.h>
 
+#include <variant>
+
 #include "core/error.hpp"
 #include "daemon/devices/device_sources.hpp"
+#include "daemon/record/recorder.hpp"
 
 namespace livod::daemon::runtime {
 namespace {
@@ -75,15 +78,24 @@ class LiveImu final : public MeasurementSource {
 
 std::unique_ptr<MeasurementSource> open_live_imu(const SensorConfig& sensor,
                                                  const LivodConfig& config,
-                                                 drivers::capture::Doorbell* doorbell) {
+                                                 drivers::capture::Doorbell* doorbell,
+                                                 record::Recorder* recorder) {
   devices::DeviceOpenOptions options;
   options.wait_for_device = true;
   options.doorbell = doorbell;
   if (sensor.driver == Driver::can_imu) {
+    if (recorder != nullptr) {
+      const auto* device = std::get_if<DeviceSourceConfig>(&sensor.source);
+      options.can_tap =
+          &recorder->add_can_stream({sensor.name, device != nullptr ? device->interface : ""});
+    }
     return std::make_unique<LiveImu<imu::CanImuSource>>(
         sensor, "can", devices::open_can_imu_source(sensor, config, options));
   }
   if (sensor.driver == Driver::serial_imu) {
+    if (recorder != nullptr) {
+      options.serial_tap = &recorder->add_serial_stream({sensor.name, devices::kSerialChunkBytes});
+    }
     return std::make_unique<LiveImu<imu::SerialImuSource>>(
         sensor, "serial", devices::open_serial_imu_source(sensor, config, options));
   }

@@ -14,6 +14,9 @@
 // device), reported in health (WAITING then STALE, device OPENING, last_error) and retried every
 // second, so a robot may boot before its USB IMU enumerates; a lost one (interface down, adapter
 // unplugged) is STALE and reopened (docs/daemon.md).
+//
+// Recorded (`livod record`, outputs.record; docs/record.md): the capture thread copies each frame
+// or read into the recorder's tap beside its ring to the scheduler; neither waits for the other.
 
 #include <memory>
 
@@ -21,13 +24,20 @@
 #include "daemon/runtime/source.hpp"
 #include "drivers/capture/doorbell.hpp"
 
+namespace livod::daemon::record {
+class Recorder;
+}
+
 namespace livod::daemon::runtime {
 
 // Starts the IMU's capture thread (driver can_imu or serial_imu with a device source). Throws
 // livod::Error naming the sensor only for what waiting cannot fix (an invalid custom CAN
 // description, a protocol livod does not decode). `doorbell` (may be null) is rung on data.
+// `recorder` (may be null; not started yet): the capture thread also copies every CAN frame /
+// serial read into a tap of this recorder, which writes <sensor>.log / <sensor>.serial.
 std::unique_ptr<MeasurementSource> open_live_imu(const SensorConfig& sensor,
                                                  const LivodConfig& config,
-                                                 drivers::capture::Doorbell* doorbell);
+                                                 drivers::capture::Doorbell* doorbell,
+                                                 record::Recorder* recorder = nullptr);
 
 }  // namespace livod::daemon::runtime

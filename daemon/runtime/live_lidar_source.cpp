@@ -153,6 +153,14 @@ class LiveLidar final : public LiveLidarSource {
       drivers::ouster::OusterMetadataFetcherConfig fc;
       fc.host = udp->sensor_address;
       fc.port = kOusterHttpPort;
+      if (options.recorder != nullptr && sensor.metadata.empty()) {
+        // The recording replays only with the metadata: keep what the sensor serves.
+        record::Recorder* recorder = options.recorder;
+        recorder->expect_metadata(sensor.name);
+        fc.on_fetched = [recorder, name = sensor.name](const std::string& json) {
+          recorder->save_metadata(name, json);
+        };
+      }
       fetcher_ = std::make_unique<drivers::ouster::OusterMetadataFetcher>(fc);
       reinit_ = std::make_unique<drivers::ouster::OusterReinitHandler>(
           *fetcher_, drivers::ouster::OusterDecoderOptions{});

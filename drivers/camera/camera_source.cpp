@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <cstring>
 #include <stdexcept>
 
 namespace livod::camera {
@@ -9,8 +10,8 @@ namespace livod::camera {
 // The capture-thread side: DeviceLink over the backend, FrameSink over the ring.
 class CameraSource::Link final : public drivers::capture::DeviceLink, public FrameSink {
  public:
-  Link(CameraBackend& backend, FrameRing& ring, PixelFormat format, int decimation)
-      : backend_(backend), ring_(ring), format_(format), decimation_(decimation) {}
+  Link(CameraBackend& backend, FrameRing& ring, FrameRing* tap, PixelFormat format, int decimation)
+      : backend_(backend), ring_(ring), tap_(tap), format_(format), decimation_(decimation) {}
 
   // DeviceLink
   void open() override { backend_.open(); }
@@ -45,11 +46,22 @@ class CameraSource::Link final : public drivers::capture::DeviceLink, public Fra
     }
     const std::span<std::byte> slot = ring_.begin_write();
     if (slot.empty()) return {};  // full: counted by the ring
+    slot_ = slot.data();
     return cv::Mat(height, width, cv_type(format_), slot.data(), stride);
   }
   void commit(const FrameInfo& info) override {
     FrameInfo stamped = info;
     stamped.ring_push = host_now();
+    if (tap_ != nullptr) {
+      // The recorder's copy; a full tap drops it (counted by the tap) and nothing else.
+      const std::size_t bytes = static_cast<std::size_t>(info.height) * info.stride;
+      const std::span<std::byte> copy =
+          bytes <= tap_->slot_bytes() ? tap_->begin_write() : std::span<std::byte>();
+      if (!copy.empty()) {
+        std::memcpy(copy.data(), slot_, bytes);
+        tap_->commit(stamped);
+      }
+    }
     ring_.commit(stamped);
   }
 
@@ -60,6 +72,8 @@ class CameraSource::Link final : public drivers::capture::DeviceLink, public Fra
  private:
   CameraBackend& backend_;
   FrameRing& ring_;
+  FrameRing* tap_;
+  const std::byte* slot_ = nullptr;  // the ring slot acquire() handed out
   PixelFormat format_;
   int decimation_;
   std::uint64_t seen_ = 0;
@@ -93,7 +107,8 @@ CameraSource::CameraSource(const CameraSourceConfig& config, std::unique_ptr<Cam
   if (config.width <= 0 || config.height <= 0) {
     throw std::invalid_argument("CameraSource: width and height must be > 0");
   }
-  link_ = std::make_unique<Link>(*backend_, ring_, config.format, std::max(config.decimation, 1));
+  link_ = std::make_unique<Link>(*backend_, ring_, config.tap, config.format,
+                                 std::max(config.decimation, 1));
   drivers::capture::DeviceThreadConfig thread = config.thread;
   if (thread.thread_name.empty()) thread.thread_name = "cam:" + config.name;
   if (thread.silence_timeout.count() == 0 && config.reopen_on_silence) {

@@ -8,7 +8,9 @@
 //   priority and CPU. It writes each frame into a pre-allocated ring slot (the one copy), never
 //   allocates in steady state (MJPEG decoding excepted, see pixel_convert.hpp), never logs.
 // * A full ring drops the newest frame and counts it (FrameRing::overruns); `decimation` n keeps
-//   every n-th delivered frame and skips the copy of the others.
+//   every n-th delivered frame and skips the copy of the others. With a recorder's `tap`, each kept
+//   frame is copied into the tap as well (one memcpy on the capture thread; the recorder thread
+//   encodes it).
 // * A camera that stops delivering for `stale_after` (or reports an error: V4L2 ENODEV, GigE
 //   control lost) is LOST: closed, and reopened every `reopen_interval` until it is back. A
 //   camera missing at construction throws livod::Error naming it.
@@ -47,6 +49,11 @@ struct CameraSourceConfig {
   Nanoseconds rate_window{std::chrono::seconds(5)};
   // Hardware-triggered cameras are silent while the trigger is: do not reopen on silence.
   bool reopen_on_silence = true;
+  // Recording (`livod record`, outputs.record): the capture thread also copies every frame it
+  // keeps (after decimation) into this ring, slots of at least width x height x bytes per pixel;
+  // a full tap drops the frame there and counts it, never blocks. May be null; must outlive the
+  // source.
+  FrameRing* tap = nullptr;
 };
 
 struct CameraHealth {

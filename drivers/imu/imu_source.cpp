@@ -4,6 +4,7 @@
 
 #include <array>
 #include <atomic>
+#include <stdexcept>
 #include <vector>
 
 #include "core/error.hpp"
@@ -71,8 +72,9 @@ std::string format_health(const ImuSourceHealth& h) {
 
 class CanImuSource::Link final : public drivers::capture::DeviceLink {
  public:
-  Link(std::string interface, SocketOpener opener, SpscRing<CanRecord>& ring)
-      : interface_(std::move(interface)), opener_(std::move(opener)), ring_(ring) {}
+  Link(std::string interface, SocketOpener opener, SpscRing<CanRecord>& ring,
+       SpscRing<CanRecord>* tap)
+      : interface_(std::move(interface)), opener_(std::move(opener)), ring_(ring), tap_(tap) {}
 
   void open() override {
     socket_.emplace(opener_());
@@ -91,6 +93,7 @@ class CanImuSource::Link final : public drivers::capture::DeviceLink {
     for (std::size_t i = 0; i < n; ++i) {
       if (batch_[i].error) continue;
       if (ring_.try_push(batch_[i])) ++pushed_;
+      if (tap_ != nullptr) tap_->try_push(batch_[i]);  // the recorder counts its overruns
       last_rx = batch_[i].rx_time_ns;
     }
     if (last_rx >= 0) publish(published_.last_rx_ns, last_rx);
@@ -178,6 +181,7 @@ class CanImuSource::Link final : public drivers::capture::DeviceLink {
   std::string interface_;
   SocketOpener opener_;
   SpscRing<CanRecord>& ring_;
+  SpscRing<CanRecord>* tap_;
   std::optional<CanSocket> socket_;
   RealtimeToMonotonic clock_;
   std::int64_t last_refresh_ns_ = 0;
@@ -199,7 +203,7 @@ CanImuSource::CanImuSource(const CanImuSourceConfig& config, std::unique_ptr<Can
   CanSocketConfig socket = config.socket;
   if (socket.ids.empty()) socket.ids = decoder_->frame_ids();
   if (!opener) opener = [socket] { return CanSocket::open(socket); };
-  link_ = std::make_unique<Link>(socket.interface, std::move(opener), ring_);
+  link_ = std::make_unique<Link>(socket.interface, std::move(opener), ring_, config.tap);
   drivers::capture::DeviceThreadConfig thread = config.thread;
   if (thread.thread_name.empty()) thread.thread_name = "can:" + config.name;
   thread_ = std::make_unique<drivers::capture::DeviceThread>(*link_, thread);
@@ -266,8 +270,12 @@ ImuSourceHealth CanImuSource::update_health(HostTime now) {
 class SerialImuSource::Link final : public drivers::capture::DeviceLink {
  public:
   Link(std::string path, PortOpener opener, drivers::capture::PacketRing& ring,
-       std::size_t chunk_bytes)
-      : path_(std::move(path)), opener_(std::move(opener)), ring_(ring), chunk_(chunk_bytes) {}
+       drivers::capture::PacketRing* tap, std::size_t chunk_bytes)
+      : path_(std::move(path)),
+        opener_(std::move(opener)),
+        ring_(ring),
+        tap_(tap),
+        chunk_(chunk_bytes) {}
 
   void open() override { port_ = opener_(); }
   void close() noexcept override { port_.reset(); }
@@ -281,6 +289,7 @@ class SerialImuSource::Link final : public drivers::capture::DeviceLink {
     ++reads_;
     bytes_ += r.bytes;
     if (ring_.try_push({chunk_.data(), r.bytes}, HostTime(r.rx_time_ns), 0)) ++pushed_;
+    if (tap_ != nullptr) tap_->try_push({chunk_.data(), r.bytes}, HostTime(r.rx_time_ns), 0);
     publish(published_.reads, reads_);
     publish(published_.bytes, bytes_);
     publish(published_.pushed, pushed_);
@@ -312,6 +321,7 @@ class SerialImuSource::Link final : public drivers::capture::DeviceLink {
   std::string path_;
   PortOpener opener_;
   drivers::capture::PacketRing& ring_;
+  drivers::capture::PacketRing* tap_;
   std::vector<std::byte> chunk_;
   std::unique_ptr<BytePort> port_;
   std::uint64_t reads_ = 0;
@@ -341,7 +351,11 @@ SerialImuSource::SerialImuSource(const SerialImuSourceConfig& config,
       };
     }
   }
-  link_ = std::make_unique<Link>(config.path, std::move(opener), ring_, config.chunk_bytes);
+  if (config.tap != nullptr && config.tap->max_payload_bytes() < config.chunk_bytes) {
+    throw std::invalid_argument("SerialImuSource: tap slots smaller than a read");
+  }
+  link_ =
+      std::make_unique<Link>(config.path, std::move(opener), ring_, config.tap, config.chunk_bytes);
   drivers::capture::DeviceThreadConfig thread = config.thread;
   if (thread.thread_name.empty()) thread.thread_name = "imu:" + config.name;
   thread_ = std::make_unique<drivers::capture::DeviceThread>(*link_, thread);

@@ -60,6 +60,10 @@ struct CanImuSourceConfig {
   std::string name;  // the sensor's name (health, thread name)
   CanSocketConfig socket;
   std::size_t ring_capacity = 4096;  // frames (~4.5 s of a 300 frames/s IMU)
+  // Recording (`livod record`, outputs.record): the capture thread also copies every data frame
+  // it queues into this ring (try_push: a full tap drops and counts, never blocks). May be null;
+  // must outlive the source.
+  SpscRing<CanRecord>* tap = nullptr;
   drivers::capture::DeviceThreadConfig thread;
   ImuSourceTiming timing;
 };
@@ -109,6 +113,10 @@ struct SerialImuSourceConfig {
   int baud_rate = 115200;
   std::size_t ring_capacity = 1024;  // chunks
   std::size_t chunk_bytes = 4096;    // largest read
+  // Recording: the capture thread also copies every read into this ring (slots of at least
+  // chunk_bytes; try_push: a full tap drops and counts, never blocks). May be null; must outlive
+  // the source.
+  drivers::capture::PacketRing* tap = nullptr;
   drivers::capture::DeviceThreadConfig thread;
   ImuSourceTiming timing;
 };

@@ -67,7 +67,12 @@ void OusterMetadataFetcher::run(const std::stop_token& stop) {
     std::optional<ouster::SensorMetadata> metadata;
     std::string error;
     try {
-      metadata = ouster::fetch_metadata(config_.host, config_.port, config_.timeout);
+      const std::string json =
+          ouster::fetch_metadata_json(config_.host, config_.port, config_.timeout);
+      metadata = ouster::parse_metadata(json, "http://" + config_.host + ":" +
+                                                  std::to_string(config_.port) +
+                                                  std::string(ouster::kMetadataPath));
+      if (config_.on_fetched) config_.on_fetched(json);
     } catch (const Error& e) {
       error = e.what();
     }

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <stop_token>
@@ -33,6 +34,9 @@ struct OusterMetadataFetcherConfig {
   std::string host;  // the sensor's address
   std::uint16_t port = 80;
   std::chrono::milliseconds timeout{2000};  // bounds one fetch (and how long stop() may wait)
+  // Called on the fetcher thread with the JSON text of every fetch that parsed (the recorder
+  // keeps it beside the recording). May be empty; must not block for long.
+  std::function<void(const std::string& json)> on_fetched;
 };
 
 struct OusterFetchCounters {

@@ -196,25 +196,82 @@ TEST(RecordSession, WritesAConfigurationThatReplaysTheRecordingAndRefusesToOverw
   EXPECT_NE(new_recording_folder(dir / "rec"), first);
 }
 
+// `livod run` opens only the sensors the estimator uses (no camera with the visual update off):
+// one it leaves out is disabled in the recording's configuration, which then loads without
+// looking for a file the recording does not hold.
+TEST(RecordSession, ASensorLeftOutIsDisabledInTheRecordedConfiguration) {
+  const auto dir = test::temp_dir("record-left-out");
+  std::filesystem::remove_all(dir / "rec");
+  const auto config_path = dir / "live.yaml";
+  std::ofstream(config_path) << "body_frame: hdl.imu\nsensors:\n"
+                             << "  - name: hdl\n    driver: velodyne\n    model: HDL-32E\n"
+                             << "    source: {udp: {bind_address: 127.0.0.1}}\n"
+                             << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, "
+                                "0, 0]}}\n"
+                             << "  - name: cam\n    driver: v4l2\n"
+                             << "    source: {device: {path: /dev/video0}}\n"
+                             << "    camera: {width: 640, height: 480, intrinsics: [500, 500, "
+                                "320, 240]}\n"
+                             << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, "
+                                "0, 0]}}\n"
+                             << "estimator: {vio: {enabled: false}}\n";
+  const ConfigResult loaded = load_config(config_path);
+  ASSERT_TRUE(loaded.ok());
+  EXPECT_TRUE(record_problems(loaded.config).empty());
+  {
+    RecordSession session(loaded.config, dir / "rec");
+    session.recorder().add_packet_stream({"hdl", "lidar", 1206, 0});
+    session.leave_out("cam", "not used");
+    session.start();
+    EXPECT_THROW(session.leave_out("cam", "too late"), livod::Error);
+    EXPECT_TRUE(session.finish().empty());
+  }
+  const ConfigResult recorded = load_config(dir / "rec" / "config.yaml");
+  for (const auto& p : recorded.problems) {
+    EXPECT_NE(p.severity, Severity::error) << format_problem(recorded.source, p);
+  }
+  const SensorConfig* cam = recorded.config.find_sensor("cam");
+  ASSERT_NE(cam, nullptr);
+  EXPECT_FALSE(cam->enabled);
+  EXPECT_TRUE(std::holds_alternative<DeviceSourceConfig>(cam->source));
+  EXPECT_FALSE(std::filesystem::exists(dir / "rec" / "cam"));
+  EXPECT_TRUE(
+      std::holds_alternative<ReplaySourceConfig>(recorded.config.find_sensor("hdl")->source));
+}
+
 TEST(RecordSession, SensorsThatCannotBeRecordedAreNotImplementedErrors) {
   const auto dir = test::temp_dir("record-problems");
   const auto config_path = dir / "live.yaml";
   std::ofstream(config_path)
       << "body_frame: os1.imu\nsensors:\n"
       << "  - name: os1\n    driver: ouster\n    model: OS1-64\n"
-      << "    source: {udp: {sensor_address: 192.168.1.20}}\n"
+      << "    source: {udp: {}}\n"  // no metadata file and nowhere to fetch it from
       << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
       << "  - name: hdl\n    driver: velodyne\n    model: VLP-16\n"
       << "    source: {udp: {ports: {lidar: 2370}}}\n"
+      << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
+      << "  - name: mti\n    driver: serial_imu\n    source: {device: {path: /dev/ttyUSB0}}\n"
+      << "    serial: {protocol: xsens_mtdata2}\n"
+      << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
+      << "  - name: sbg\n    driver: can_imu\n    source: {device: {interface: can0}}\n"
+      << "    can: {decoder: sbg}\n"
+      << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n"
+      << "  - name: rec\n    driver: can_imu\n    source: {replay: {file: old.log}}\n"
+      << "    can: {decoder: sbg}\n"
       << "    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}\n";
   const ConfigResult loaded = load_config(config_path);
   // (The configuration itself may have its own problems, e.g. a second LiDAR; the recording's
   // are what matter here.)
+  // The IMUs with a device source are recorded (candump log, serial capture); a sensor that
+  // replays a file is not.
   const auto problems = record_problems(loaded.config);
-  ASSERT_EQ(problems.size(), 2U);
+  ASSERT_EQ(problems.size(), 3U);
   for (const auto& p : problems) EXPECT_EQ(p.kind, ProblemKind::not_implemented);
   EXPECT_NE(problems[0].message.find("metadata"), std::string::npos) << problems[0].message;
   EXPECT_NE(problems[1].message.find("port 2370"), std::string::npos) << problems[1].message;
+  EXPECT_NE(problems[2].message.find("'rec'"), std::string::npos) << problems[2].message;
+  EXPECT_NE(problems[2].message.find("replays a recording"), std::string::npos)
+      << problems[2].message;
 }
 
 }  // namespace
