@@ -4,7 +4,11 @@
 // faults of a real link: the sensor falling silent for 2 s, malformed datagrams, and a Livox LiDAR
 // (a fake speaking the SDK1 control protocol) powered off and on, which must be handshaken anew.
 //
-// Real time: each case streams 6-10 s of recording.
+// Several LiDARs: two Mid-360s, each on its own ports, their captures sent on one timeline, feed
+// the one estimator as in replay; one of them unplugged for 2 s goes STALE while the estimator
+// carries on with the other.
+//
+// Real time: each case streams 6-12 s of recording.
 
 #include <gtest/gtest.h>
 
@@ -274,11 +278,10 @@ TEST(DaemonLive, TwoMid360sFeedOneEstimatorAsInReplay) {
   const std::uint64_t rear_scans = summary_scans(live.result, "rear");
   EXPECT_GE(front_scans, 75U);
   EXPECT_GE(rear_scans, 75U);
-  EXPECT_EQ(live.result.estimator.scans_in, replayed.summary.counters.scans_in);
   for (const auto& r : replayed.summary.sensors) {
-    std::printf("[live] replay %s: %llu scans to the estimator\n", r.name.c_str(),
-                static_cast<unsigned long long>(r.scans));
+    EXPECT_EQ(r.name == "front" ? front_scans : rear_scans, r.scans) << r.name << " (replay)";
   }
+  EXPECT_EQ(live.result.estimator.scans_in, replayed.summary.counters.scans_in);
   ASSERT_FALSE(live.bus.health.empty());
   for (std::size_t i = 0; i < 2; ++i) {
     double max_rate = 0.0;
