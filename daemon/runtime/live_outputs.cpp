@@ -136,7 +136,12 @@ void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {
   const auto& sensors = scheduler.sensors();
   if (rates_.size() != sensors.size()) rates_.resize(sensors.size());
   h->sensors.resize(sensors.size());
-  bool lidar_stale = false;
+  // SENSOR_STALE when no new estimate can come: every LiDAR is STALE, or the one whose internal IMU
+  // is the body IMU (the IMU went with it). One of several LiDARs STALE is not: the others still
+  // end scans and the filter updates with them (docs/estimator.md "Several LiDARs").
+  std::size_t lidars = 0;
+  std::size_t stale_lidars = 0;
+  bool body_lidar_stale = false;
   for (std::size_t i = 0; i < sensors.size(); ++i) {
     ScheduledSensor& s = *sensors[i];
     const std::string kind(enum_name(s.config->driver));
@@ -163,10 +168,15 @@ void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {
       h->sensors[i].last_data_age_ns = s.last_event ? (now - *s.last_event).count() : -1;
     }
     h->sensors[i].name = s.config->name;
-    if (s.scans_to_estimator && h->sensors[i].state == publish::SensorState::kStale) {
-      lidar_stale = true;
+    if (s.scans_to_estimator) {
+      ++lidars;
+      if (h->sensors[i].state == publish::SensorState::kStale) {
+        ++stale_lidars;
+        body_lidar_stale = body_lidar_stale || s.imu_to_estimator;
+      }
     }
   }
+  const bool lidar_stale = lidars > 0 && (stale_lidars == lidars || body_lidar_stale);
 
   // Not scheduler.pipeline(): an update may be running on the update thread.
   const EstimatorStatus& est = scheduler.estimator_status();

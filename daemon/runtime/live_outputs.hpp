@@ -8,7 +8,9 @@
 // seeds the map from the initialisation's pose); DEGENERATE when the update was weak along some
 // direction; IMU_ONLY when a scan could not update the state (too few matches) and for IMU-rate
 // poses propagated longer than imu_only_after; SENSOR_STALE, at the health rate, repeating the
-// last pose while the estimator's LiDAR is STALE.
+// last pose while the estimator can make no new estimate: every LiDAR feeding it is STALE, or the
+// STALE one carries the body IMU. One of several LiDARs STALE while another (and the body IMU)
+// still streams is in that sensor's health only: the filter goes on updating with the others.
 
 #include <array>
 #include <cstddef>
@@ -65,7 +67,8 @@ class LiveOutputs final : public OutputSink {
   [[nodiscard]] bool wants_imu_poses() const override { return options_.imu_poses; }
 
   // Scheduler thread, at the health cadence: a health snapshot for the publisher. When the
-  // estimator's LiDAR is STALE, the last pose is published again with status SENSOR_STALE.
+  // estimator's LiDARs are STALE (see above), the last pose is published again with status
+  // SENSOR_STALE.
   void publish_health(Scheduler& scheduler, HostTime now);
 
   [[nodiscard]] std::uint64_t dropped() const;

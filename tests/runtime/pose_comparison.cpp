@@ -23,6 +23,7 @@ PoseComparison compare_with_replay(const std::vector<PoseRecord>& live,
   for (std::size_t j = 0; j < std::min<std::size_t>(8, rep_ns.size()); ++j) {
     const std::int64_t shift = live.front().t.ns - rep_ns[j];
     PoseComparison c;
+    c.shift_ns = shift;
     for (const auto& p : live) {
       if (p.status == PoseStatus::kSensorStale) continue;
       const std::int64_t t = p.t.ns - shift;

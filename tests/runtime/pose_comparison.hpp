@@ -5,6 +5,7 @@
 // 1 ms. SENSOR_STALE poses are repeats of the last pose, not new ones, and are not paired.
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "daemon/publish/records.hpp"
@@ -16,6 +17,7 @@ struct PoseComparison {
   std::size_t matched = 0;
   double max_position_m = 0.0;
   double max_rotation_deg = 0.0;
+  std::int64_t shift_ns = 0;  // live time - replay time of the paired poses
 };
 
 PoseComparison compare_with_replay(const std::vector<daemon::publish::PoseRecord>& live,
