@@ -1,8 +1,10 @@
 #include "estimator/vio/reference_patch.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
+#include "estimator/vio/photometric.hpp"
 #include "estimator/vio/warp.hpp"
 
 namespace livod::estimator::vio {
@@ -33,6 +35,7 @@ bool capture_blocks(const ImagePyramid& pyramid, const Eigen::Vector2d& px, int 
 bool warp_reference_patch(const PatchObservation& ref, const Eigen::Matrix2d& A_ref_cur, int level,
                           int levels, int patch_size, float* out) {
   const int P = patch_size;
+  if (P > kMaxPatchSize) return false;  // as everywhere in the update (PatchEval)
   const int S = block_edge(P);
   const int k = std::clamp(level + reference_level_offset(A_ref_cur), 0, levels - 1);
   // Current level-l offsets -> reference level-k offsets.
@@ -50,6 +53,9 @@ bool warp_reference_patch(const PatchObservation& ref, const Eigen::Matrix2d& A_
       }
     }
   }
+  // The block as floats once (S^2 conversions instead of 4 per sample; the same values).
+  std::array<float, block_edge(kMaxPatchSize) * block_edge(kMaxPatchSize)> pixels;  // NOLINT
+  for (int q = 0; q < S * S; ++q) pixels[static_cast<std::size_t>(q)] = block[q];
   const auto tau = ref.inv_exposure;
   const Eigen::Vector2f step_x = M.col(0).cast<float>();
   const Eigen::Vector2f step_y = M.col(1).cast<float>();
@@ -60,7 +66,7 @@ bool warp_reference_patch(const PatchObservation& ref, const Eigen::Matrix2d& A_
       // Float steps can drift a hair past a corner that lies exactly on the limit.
       const float x = std::clamp(pos.x(), 0.0F, static_cast<float>(limit) - 1e-4F);
       const float y = std::clamp(pos.y(), 0.0F, static_cast<float>(limit) - 1e-4F);
-      out[j * P + i] = tau * sample_block(block, S, x, y);
+      out[j * P + i] = tau * sample_block(pixels.data(), S, x, y);
     }
   }
   return true;

@@ -18,7 +18,7 @@ bool capture_blocks(const ImagePyramid& pyramid, const Eigen::Vector2d& px, int 
 // values (row-major, centred offsets, times the reference's inverse exposure) sampled from the
 // reference block whose scale matches best. A_ref_cur maps level-0 pixel offsets in the current
 // image to level-0 offsets in the reference image. False when the warped patch leaves the block
-// (a large rotation or scale change: the level is then not used).
+// (a large rotation or scale change: the level is then not used) or patch_size > kMaxPatchSize.
 bool warp_reference_patch(const PatchObservation& ref, const Eigen::Matrix2d& A_ref_cur, int level,
                           int levels, int patch_size, float* out);
 

@@ -135,6 +135,7 @@ void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3
   const std::size_t n = scan_world.size();
   scan_px_.resize(n);
   scan_range_.resize(n);
+  scan_point_keys_.resize(n);
   const double cos_fov = cos_half_fov_;
   for_range(n, 2048, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
@@ -147,13 +148,14 @@ void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3
       if (!px || !camera_.in_image(*px)) continue;
       scan_px_[i] = px->cast<float>();
       scan_range_[i] = static_cast<float>(pc.norm());
+      scan_point_keys_[i] = map_.key(scan_world[i]);
     }
   });
   // The visual voxels to look in: those of the scan's points in the image (FAST-LIVO2 takes the
   // voxels of the whole scan; the others hold nothing the camera sees).
   scan_keys_.clear();
   for (std::size_t i = 0; i < n; ++i) {
-    if (scan_range_[i] >= 0.0F) scan_keys_.push_back(map_.key(scan_world[i]));
+    if (scan_range_[i] >= 0.0F) scan_keys_.push_back(scan_point_keys_[i]);
   }
   // The sparse depth image: the nearest LiDAR return per cell.
   std::fill(depth_.begin(), depth_.end(), kInf);
@@ -244,7 +246,6 @@ void VioProcessor::select(const State& x, VioReport& report) {
   for (std::size_t cell = 0; cell < cells; ++cell) {
     if (cell_point_[cell] < 0) continue;
     const std::uint32_t id = candidates_[static_cast<std::size_t>(cell_point_[cell])];
-    cell_point_[cell] = -1;
     const VisualPoint& vp = map_.at(id);
     const Eigen::Vector3d pc = T_cw * vp.p_world;
     const Eigen::Vector2d px = *camera_.project(pc);
@@ -259,13 +260,19 @@ void VioProcessor::select(const State& x, VioReport& report) {
     patch.cell = static_cast<int>(cell);
     patch.ref_offset = refs_.size();
     refs_.resize(refs_.size() + per_patch);
-    if (!warp_reference(x, patch, refs_.data() + patch.ref_offset)) {
-      refs_.resize(refs_.size() - per_patch);
-      continue;
-    }
-    cell_point_[cell] = static_cast<std::int32_t>(patches_.size());
     patches_.push_back(patch);
   }
+  // The reference warps (most of the selection's time) are independent: one slot each. A patch
+  // whose warp fails at every level is dropped afterwards, in order (its refs_ slot stays unused).
+  for_range(patches_.size(), 16, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Patch& patch = patches_[i];
+      warp_reference(x, patch, refs_.data() + patch.ref_offset);
+    }
+  });
+  patches_.erase(std::remove_if(patches_.begin(), patches_.end(),
+                                [](const Patch& p) { return p.level_mask == 0; }),
+                 patches_.end());
   report.selected = static_cast<int>(patches_.size());
 }
 
@@ -274,25 +281,32 @@ double VioProcessor::gate(const State& x, VioReport& report) {
   const std::size_t n = static_cast<std::size_t>(P * P);
   // The exposure change first, robustly (median of the patches' mean ratios): a camera's auto
   // exposure doubling the brightness would otherwise fail every patch at the gate.
-  ratios_.clear();
-  ratios_.reserve(patches_.size());
+  // Each patch's mean ratio in its own slot (NaN: none), collected in patch order afterwards.
   gate_evals_.resize(patches_.size());
-  for (std::size_t i = 0; i < patches_.size(); ++i) {
-    Patch& p = patches_[i];
-    const int l = lowest_level(p.level_mask);
-    PatchEval& ev = gate_evals_[i];
-    if (!evaluate_patch(pyramid_.level(l), l, P, p.px, 1.0, nullptr, ev)) {
-      ev.pixels = 0;
-      continue;
+  gate_ratios_.resize(patches_.size());
+  for_range(patches_.size(), 16, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Patch& p = patches_[i];
+      const int l = lowest_level(p.level_mask);
+      PatchEval& ev = gate_evals_[i];
+      gate_ratios_[i] = std::numeric_limits<double>::quiet_NaN();
+      if (!evaluate_patch(pyramid_.level(l), l, P, p.px, 1.0, nullptr, ev)) {
+        ev.pixels = 0;
+        continue;
+      }
+      double cur = 0.0;
+      double ref = 0.0;
+      const float* r = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
+      for (std::size_t k = 0; k < n; ++k) {
+        cur += ev.intensity[k];
+        ref += r[k];
+      }
+      if (cur > static_cast<double>(n)) gate_ratios_[i] = ref / cur;
     }
-    double cur = 0.0;
-    double ref = 0.0;
-    const float* r = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
-    for (std::size_t k = 0; k < n; ++k) {
-      cur += ev.intensity[k];
-      ref += r[k];
-    }
-    if (cur > static_cast<double>(n)) ratios_.push_back(ref / cur);
+  });
+  ratios_.clear();
+  for (const double ratio : gate_ratios_) {
+    if (!std::isnan(ratio)) ratios_.push_back(ratio);
   }
   double tau = x.inv_exposure;
   if (params_.exposure_estimate && static_cast<int>(ratios_.size()) >= params_.min_patches) {
@@ -433,14 +447,15 @@ void VioProcessor::unit_patch(const PatchObservation& obs, float* out) const {
   const std::size_t n = static_cast<std::size_t>(P * P);
   const int start = (S - P) / 2;
   const std::uint8_t* b = obs.block(0, S);
-  double mean = 0.0;
+  std::uint32_t sum = 0;  // exact, as the double sum of the pixels is
   for (int y = 0; y < P; ++y) {
     for (int x = 0; x < P; ++x) {
-      out[y * P + x] = static_cast<float>(b[(start + y) * S + start + x]);
-      mean += out[y * P + x];
+      const std::uint8_t v = b[(start + y) * S + start + x];
+      out[y * P + x] = static_cast<float>(v);
+      sum += v;
     }
   }
-  mean /= static_cast<double>(n);
+  const double mean = static_cast<double>(sum) / static_cast<double>(n);
   double norm = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
     out[k] -= static_cast<float>(mean);
@@ -450,12 +465,15 @@ void VioProcessor::unit_patch(const PatchObservation& obs, float* out) const {
   for (std::size_t k = 0; k < n; ++k) out[k] *= inv;
 }
 
-void VioProcessor::add_observation(VisualPoint& point, PatchObservation obs) {
+void VioProcessor::add_observation(VisualPoint& point, PatchObservation obs,
+                                   std::vector<float>& work) const {
   auto& all = point.observations;
   const std::size_t n = static_cast<std::size_t>(params_.patch_size * params_.patch_size);
-  ncc_work_.resize(2 * n);
-  float* u_new = ncc_work_.data();
-  float* u = ncc_work_.data() + n;
+  // The level-0 unit patches of the point's observations, slot i for all[i] and the new one last,
+  // computed once for the scores and for the eviction below.
+  const std::size_t m = all.size();
+  work.resize((m + 1) * n);
+  auto unit = [&](std::size_t i) { return work.data() + i * n; };
   auto abs_dot = [n](const float* a, const float* b) {
     float dot = 0.0F;
     for (std::size_t k = 0; k < n; ++k) dot += a[k] * b[k];
@@ -464,12 +482,12 @@ void VioProcessor::add_observation(VisualPoint& point, PatchObservation obs) {
   // FAST-LIVO2's reference score: mean |NCC| of the level-0 patch with the point's other patches
   // plus the cosine of the viewing angle. The NCC sums are kept per patch and updated for the one
   // added and the one dropped (O(n) patch products instead of O(n^2)).
-  unit_patch(obs, u_new);
+  unit_patch(obs, unit(m));
   obs.ncc_sum = 0.0F;
-  for (auto& o : all) {
-    unit_patch(o, u);
-    const float d = abs_dot(u_new, u);
-    o.ncc_sum += d;
+  for (std::size_t i = 0; i < m; ++i) {
+    unit_patch(all[i], unit(i));
+    const float d = abs_dot(unit(m), unit(i));
+    all[i].ncc_sum += d;
     obs.ncc_sum += d;
   }
   all.push_back(std::move(obs));
@@ -490,11 +508,9 @@ void VioProcessor::add_observation(VisualPoint& point, PatchObservation obs) {
     for (std::size_t i = 0; i < all.size(); ++i) {
       if (i != best && all[i].score < all[worst].score) worst = i;
     }
-    unit_patch(all[worst], u_new);
     for (std::size_t i = 0; i < all.size(); ++i) {
       if (i == worst) continue;
-      unit_patch(all[i], u);
-      all[i].ncc_sum = std::max(0.0F, all[i].ncc_sum - abs_dot(u_new, u));
+      all[i].ncc_sum = std::max(0.0F, all[i].ncc_sum - abs_dot(unit(worst), unit(i)));
     }
     all.erase(all.begin() + static_cast<std::ptrdiff_t>(worst));
     best = score_all();
@@ -530,9 +546,29 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
   const double obs_angle = params_.observation_angle_deg * M_PI / 180.0;
   std::vector<std::uint8_t>& occupied = occupied_;
   occupied.assign(cells, 0);
-  PatchEval e;
+  // The photometric error after the update, per patch in its own slots (independent work).
+  for_range(patches_.size(), 16, [&](std::size_t begin, std::size_t end) {
+    PatchEval e;
+    for (std::size_t i = begin; i < end; ++i) {
+      Patch& p = patches_[i];
+      p.mse_after = -1.0;
+      if (!p.used) continue;
+      const auto px = project_from_state(camera_, extrinsic_, x, map_.at(p.id).p_world);
+      if (!px) continue;
+      const int l = lowest_level(p.level_mask);
+      const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
+      if (!evaluate_patch(pyramid_.level(l), l, P, *px, x.inv_exposure, ref, e)) continue;
+      double mse = 0.0;
+      for (std::size_t k = 0; k < n; ++k) {
+        mse += static_cast<double>(e.residual[k]) * e.residual[k];
+      }
+      p.px_after = *px;
+      p.mse_after = mse / static_cast<double>(n);
+    }
+  });
   double sq_after = 0.0;
   int tracked = 0;
+  observe_.clear();
   for (const Patch& p : patches_) {
     if (!p.used) {
       if (debug_) {
@@ -541,15 +577,10 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
       }
       continue;
     }
+    if (p.mse_after < 0.0) continue;
     VisualPoint& vp = map_.at(p.id);
-    const auto px = project_from_state(camera_, extrinsic_, x, vp.p_world);
-    if (!px) continue;
-    const int l = lowest_level(p.level_mask);
-    const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
-    if (!evaluate_patch(pyramid_.level(l), l, P, *px, x.inv_exposure, ref, e)) continue;
-    double mse = 0.0;
-    for (std::size_t k = 0; k < n; ++k) mse += static_cast<double>(e.residual[k]) * e.residual[k];
-    mse /= static_cast<double>(n);
+    const Eigen::Vector2d* px = &p.px_after;
+    const double mse = p.mse_after;
     const bool ok = mse <= params_.outlier_threshold;
     if (debug_) {
       report.debug.push_back({px->cast<float>(),
@@ -573,14 +604,25 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
     const bool moved = (center - last.p_world_cam).norm() > params_.observation_distance_m ||
                        q_wc.angularDistance(last.q_world_cam) > obs_angle ||
                        (*px - last.pixel).norm() > params_.observation_pixels;
-    if (!moved) continue;
-    PatchObservation obs;
-    if (!capture(x, *px, obs)) continue;
-    ++report.new_observations;
-    refine_normal(vp, center, lidar_map);
-    add_observation(vp, std::move(obs));
+    if (moved) observe_.push_back(static_cast<std::uint32_t>(&p - patches_.data()));
   }
   report.rms_after = tracked > 0 ? std::sqrt(sq_after / tracked) : 0.0;
+  // The new reference patches: each touches its own point only (and reads the image and the
+  // LiDAR map), so the points are done in parallel, with the same result as one after the other.
+  observed_.assign(observe_.size(), 0);
+  for_range(observe_.size(), 8, [&](std::size_t begin, std::size_t end) {
+    std::vector<float> work;
+    for (std::size_t k = begin; k < end; ++k) {
+      const Patch& p = patches_[observe_[k]];
+      VisualPoint& vp = map_.at(p.id);
+      PatchObservation obs;
+      if (!capture(x, p.px_after, obs)) continue;
+      observed_[k] = 1;
+      refine_normal(vp, center, lidar_map);
+      add_observation(vp, std::move(obs), work);
+    }
+  });
+  for (const auto o : observed_) report.new_observations += o;
 
   // New points in the cells left empty: the LiDAR point with a plane and the best corner score.
   std::vector<float>& best_score = cell_depth_;  // reused as the per-cell best score
@@ -605,22 +647,38 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
   std::vector<std::uint32_t>& count = cell_count_;
   count.assign(cells, 0);
   const std::size_t points = std::min(scan_world.size(), scan_normals.size());
+  // Each point's cell once (in parallel), for the two passes below.
+  scan_cell_.resize(points);
+  for_range(points, 2048, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) scan_cell_[i] = cell_of(i);
+  });
   for (std::size_t i = 0; i < points; ++i) {
-    if (const auto c = cell_of(i); c >= 0) ++count[static_cast<std::size_t>(c)];
+    if (const auto c = scan_cell_[i]; c >= 0) ++count[static_cast<std::size_t>(c)];
   }
   std::vector<std::uint32_t>& seen = cell_seen_;
   seen.assign(cells, 0);
+  // Which points are scored is decided first; the scores (independent) are computed in their own
+  // slots, then each cell keeps its best in point order.
+  scored_.clear();
   for (std::size_t i = 0; i < points; ++i) {
-    const auto c = cell_of(i);
+    const auto c = scan_cell_[i];
     if (c < 0) continue;
     const auto cell = static_cast<std::size_t>(c);
     const std::uint32_t stride = std::max<std::uint32_t>(1, count[cell] / kCandidatesPerCell);
     if (seen[cell]++ % stride != 0 || tried[cell] >= kCandidatesPerCell) continue;
     ++tried[cell];
-    const auto score = static_cast<float>(shi_tomasi_score(grey_, scan_px_[i].cast<double>(), P));
-    if (score > best_score[cell]) {
-      best_score[cell] = score;
-      best_index[cell] = static_cast<std::int32_t>(i);
+    scored_.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(cell), 0.0F});
+  }
+  for_range(scored_.size(), 64, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      scored_[k].score =
+          static_cast<float>(shi_tomasi_score(grey_, scan_px_[scored_[k].point].cast<double>(), P));
+    }
+  });
+  for (const auto& c : scored_) {
+    if (c.score > best_score[c.cell]) {
+      best_score[c.cell] = c.score;
+      best_index[c.cell] = static_cast<std::int32_t>(c.point);
     }
   }
   const double cos_max = std::cos(params_.max_view_angle_deg * M_PI / 180.0);

@@ -131,8 +131,8 @@ class VioProcessor {
                 VioReport& report);
   bool capture(const State& x, const Eigen::Vector2d& px, PatchObservation& obs) const;
   // Adds a reference patch, keeps at most max_observations and picks the reference (FAST-LIVO2's
-  // score).
-  void add_observation(VisualPoint& point, PatchObservation obs);
+  // score). `work`: scratch space (unit patches).
+  void add_observation(VisualPoint& point, PatchObservation obs, std::vector<float>& work) const;
   // The level-0 patch of an observation, zero-mean and unit-norm (P^2 values).
   void unit_patch(const PatchObservation& obs, float* out) const;
   void refine_normal(VisualPoint& point, const Eigen::Vector3d& camera_center,
@@ -169,6 +169,8 @@ class VioProcessor {
     std::size_t ref_offset = 0;    // into refs_: levels x P^2 values (tau_ref applied)
     bool used = false;             // passed the gate
     float rms_before = 0.0F;
+    Eigen::Vector2d px_after = Eigen::Vector2d::Zero();  // pixel at the updated state
+    double mse_after = -1.0;  // photometric mean squared error there (< 0: not evaluated)
   };
   std::vector<Patch> patches_;
   std::vector<float> refs_;
@@ -177,12 +179,22 @@ class VioProcessor {
   std::vector<std::uint8_t> cell_tried_;
   std::vector<std::uint32_t> cell_count_;
   std::vector<std::uint32_t> cell_seen_;
-  std::vector<Eigen::Vector2f> scan_px_;  // the scan's pixels at the prior pose
-  std::vector<float> scan_range_;         // their ranges from the camera; < 0: not in the image
-  std::vector<VoxelKey> scan_keys_;       // the visual voxels of those in the image
+  struct ScoredPoint {
+    std::uint32_t point = 0;  // index into the scan
+    std::uint32_t cell = 0;
+    float score = 0.0F;  // Shi-Tomasi
+  };
+  std::vector<ScoredPoint> scored_;        // new-point candidates of the image
+  std::vector<std::int64_t> scan_cell_;    // per scan point: its empty grid cell, -1: none
+  std::vector<Eigen::Vector2f> scan_px_;   // the scan's pixels at the prior pose
+  std::vector<float> scan_range_;          // their ranges from the camera; < 0: not in the image
+  std::vector<VoxelKey> scan_keys_;        // the visual voxels of those in the image
+  std::vector<VoxelKey> scan_point_keys_;  // per scan point (set where the range is >= 0)
   std::vector<PatchNormals> block_sums_;
   std::vector<PatchEval> gate_evals_;
-  std::vector<float> ncc_work_;
+  std::vector<double> gate_ratios_;     // per patch, NaN: none
+  std::vector<std::uint32_t> observe_;  // patches that get a new reference patch
+  std::vector<std::uint8_t> observed_;  // per entry of observe_: it did (the capture fit)
   double cos_half_fov_ = -1.0;  // cosine of the widest ray's angle off axis (+ margin); -1: none
   VisualMapStats map_stats_;
   bool debug_ = false;

@@ -1,6 +1,7 @@
 #include "estimator/vio/visual_map.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace livod::estimator::vio {
@@ -43,12 +44,18 @@ void VisualMap::remove(std::uint32_t id) {
 void VisualMap::gather(const std::vector<VoxelKey>& keys, std::vector<std::uint32_t>& ids) {
   ids.clear();
   ++visit_;
-  VoxelKey last{};
-  bool have_last = false;
+  // The keys looked up lately, direct-mapped by hash: a key met again (the scan's points revisit
+  // a voxel many times, not only in runs) needs no table lookup, its voxel was gathered (or it has
+  // none). The same ids in the same order as looking every key up.
+  constexpr std::size_t kRecent = 64;
+  std::array<VoxelKey, kRecent> recent{};
+  std::array<bool, kRecent> have{};
+  const VoxelKeyHash hash;
   for (const auto& key : keys) {
-    if (have_last && key == last) continue;
-    last = key;
-    have_last = true;
+    const std::size_t slot = hash(key) % kRecent;
+    if (have[slot] && recent[slot] == key) continue;
+    recent[slot] = key;
+    have[slot] = true;
     const auto it = voxels_.find(key);
     if (it == voxels_.end() || it->second.visit == visit_) continue;
     it->second.visit = visit_;

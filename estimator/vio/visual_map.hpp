@@ -83,8 +83,8 @@ class VisualMap {
 
   // The voxel of a world point.
   [[nodiscard]] VoxelKey key(const Eigen::Vector3d& p) const { return voxel_key(p, voxel_size_); }
-  // Ids of the points in the voxels `keys` name, each once; runs of equal keys cost one lookup
-  // (scans arrive in spatial order).
+  // Ids of the points in the voxels `keys` name, each once, in the order of the keys; a key met
+  // again shortly after costs no lookup (scans arrive in spatial order).
   void gather(const std::vector<VoxelKey>& keys, std::vector<std::uint32_t>& ids);
 
   // Drops the voxels outside the LiDAR map's box once the sensor moved slide_threshold since the

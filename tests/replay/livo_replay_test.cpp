@@ -193,9 +193,10 @@ TEST_F(LivoReplay, DebugImagesAreWrittenPerImage) {
 }
 
 TEST_F(LivoReplay, SameBytesForAnyThreadCount) {
-  // The visual update spreads its scan projection and patch linearisation over the worker pool in
-  // fixed blocks summed in order: one thread and two give the same trajectory and map, byte for
-  // byte (the fixture ran with one thread per core).
+  // The visual update spreads its per-point and per-patch work (scan projection, reference warps,
+  // photometric errors and rows, corner scores, new reference patches) over the worker pool, each
+  // item in its own slots, sums in fixed blocks in order: one thread and two give the same
+  // trajectory and map, byte for byte (the fixture ran with one thread per core).
   daemon::replay::ReplayOptions ro;
   ro.out_dir = test::temp_dir("livo-replay-serial");
   ro.threads = 1;
