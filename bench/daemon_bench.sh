@@ -16,6 +16,8 @@
 # BUILD_DIR defaults to build/release and needs the targets livod and pcap_udp_sender. The daemon
 # runs with the shipped service configuration's SCHED_FIFO priorities (capture 50, scheduler 40;
 # needs root or RLIMIT_RTPRIO, else the refusal is logged); REALTIME=0 runs it without.
+# CPU_LATENCY_US=N adds realtime.cpu_dma_latency_us: N (a PM QoS wake-up latency bound; needs write
+# access to /dev/cpu_dma_latency; docs/daemon.md "Real-time settings").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-latency}
@@ -53,7 +55,7 @@ EOF
   # The shipped service configuration's real-time settings (systemd/livod.example.yaml), as on a
   # robot; REALTIME=0 measures normal scheduling.
   if [ "${REALTIME:-1}" != 0 ]; then
-    echo "realtime: {capture_priority: 50, scheduler_priority: 40}" >> "$sim/live.yaml"
+    echo "realtime: {capture_priority: 50, scheduler_priority: 40, cpu_dma_latency_us: ${CPU_LATENCY_US:--1}}" >> "$sim/live.yaml"
   fi
   if [ -n "$estimator" ]; then echo "estimator: $estimator" >> "$sim/live.yaml"; fi
 }

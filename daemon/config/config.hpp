@@ -282,6 +282,9 @@ struct RealtimeConfig {
   int capture_cpu = -1;      // pin every capture thread to this CPU; -1 = any
   int scheduler_cpu = -1;    // pin the scheduler thread to this CPU; -1 = any
   bool lock_memory = false;  // mlockall(MCL_CURRENT | MCL_FUTURE)
+  // PM QoS CPU wake-up latency bound (us) held while running; -1 = no request
+  // (daemon/runtime/cpu_latency_request.hpp).
+  int cpu_dma_latency_us = -1;
 };
 
 struct LivodConfig {

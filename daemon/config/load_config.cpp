@@ -63,6 +63,7 @@ void read_realtime(MapReader& m, RealtimeConfig& realtime) {
   m.read("capture_cpu", realtime.capture_cpu, -1, 1023);
   m.read("scheduler_cpu", realtime.scheduler_cpu, -1, 1023);
   m.read("lock_memory", realtime.lock_memory);
+  m.read("cpu_dma_latency_us", realtime.cpu_dma_latency_us, -1, 1'000'000);
   m.finish();
 }
 

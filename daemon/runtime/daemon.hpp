@@ -62,6 +62,8 @@ struct DaemonOptions {
   // Tests: called on the map writer thread before each map save is written (a test blocks in it
   // to keep a save in progress and see requests coalesce). Empty: none.
   std::function<void()> map_save_hook;
+  // Tests: the file realtime.cpu_dma_latency_us is written to; empty: /dev/cpu_dma_latency.
+  std::filesystem::path cpu_latency_device;
 };
 
 struct DaemonResult {

@@ -9,9 +9,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <thread>
+#include <vector>
 
 #include "daemon/config/sensor_models.hpp"
 #include "daemon/runtime/daemon.hpp"
@@ -141,6 +146,44 @@ TEST(DaemonShutdown, PacedReplayEndsWithTheRecording) {
                 static_cast<unsigned long long>(bus.ring_overruns),
                 static_cast<unsigned long long>(bus.imu_poses));
   }
+}
+
+// realtime.cpu_dma_latency_us: the daemon holds its PM QoS request from before the threads start
+// until it returns (a scratch file stands in for /dev/cpu_dma_latency).
+TEST(DaemonShutdown, HoldsTheCpuLatencyRequestWhileItRuns) {
+  const auto out = test::temp_dir("cpu-latency");
+  std::ofstream(out / "cpu_dma_latency").close();
+  const auto device = std::filesystem::canonical(out / "cpu_dma_latency");
+  auto held_by_us = [&device] {
+    int n = 0;
+    for (const auto& fd : std::filesystem::directory_iterator("/proc/self/fd")) {
+      std::error_code ec;
+      if (std::filesystem::read_symlink(fd.path(), ec) == device) ++n;
+    }
+    return n;
+  };
+  daemon::LivodConfig config = test::load_clean_config(sim_folder() / "config.yaml");
+  config.realtime.cpu_dma_latency_us = 20;
+  CountingBus bus;
+  daemon::runtime::DaemonOptions options;
+  options.paced_replay = true;
+  options.bus = &bus;
+  options.out_dir = out;
+  options.max_duration = std::chrono::milliseconds(500);
+  options.cpu_latency_device = device;
+  int held_while_running = -1;
+  options.on_ready = [&](const auto& /*ports*/) { held_while_running = held_by_us(); };
+  const auto r = daemon::runtime::run_daemon(config, options);
+  ASSERT_EQ(r.exit_code, 0) << (r.errors.empty() ? "" : r.errors.front());
+  EXPECT_EQ(held_while_running, 1);
+  EXPECT_EQ(held_by_us(), 0);  // released when the daemon returned
+  std::ifstream in(device, std::ios::binary);
+  const std::vector<char> bytes{std::istreambuf_iterator<char>(in),
+                                std::istreambuf_iterator<char>()};
+  ASSERT_EQ(bytes.size(), sizeof(std::int32_t));
+  std::int32_t value = 0;
+  std::memcpy(&value, bytes.data(), sizeof value);
+  EXPECT_EQ(value, 20);
 }
 
 }  // namespace

@@ -48,6 +48,7 @@ TEST(ConfigDefaults, TopLevelSectionsTakeTheirDefaults) {
   EXPECT_DOUBLE_EQ(c.health.stale_after_s, 0.5);
   EXPECT_EQ(c.realtime.capture_priority, 0);
   EXPECT_FALSE(c.realtime.lock_memory);
+  EXPECT_EQ(c.realtime.cpu_dma_latency_us, -1);  // no PM QoS request unless asked for
 }
 
 // The estimator defaults are FAST-LIVO2's avia.yaml (fast-livo2-notes.md section 1.5).
@@ -162,7 +163,7 @@ outputs:
   lcm: {url: "memq://", channel_suffix: _REPLAY, publish_cloud: true, cloud_max_points: 5000}
   trajectory: /tmp/livod-test-traj.tum
 health: {period_s: 0.5, stale_after_s: 0.2}
-realtime: {capture_priority: 60, scheduler_priority: 50, lock_memory: true}
+realtime: {capture_priority: 60, scheduler_priority: 50, lock_memory: true, cpu_dma_latency_us: 0}
 )");
   ASSERT_TRUE(result.problems.empty()) << dump(result);
   const LivodConfig& c = result.config;
@@ -185,6 +186,7 @@ realtime: {capture_priority: 60, scheduler_priority: 50, lock_memory: true}
   EXPECT_DOUBLE_EQ(c.health.period_s, 0.5);
   EXPECT_EQ(c.realtime.capture_priority, 60);
   EXPECT_TRUE(c.realtime.lock_memory);
+  EXPECT_EQ(c.realtime.cpu_dma_latency_us, 0);
 }
 
 TEST(ConfigDefaults, VisualUpdateKeys) {

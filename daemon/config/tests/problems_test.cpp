@@ -141,6 +141,8 @@ TEST(ConfigProblems, OutOfRange) {
                ProblemKind::out_of_range, "estimator.lio.blind");
   only_problem(load(minimal_config() + "realtime: {capture_priority: 120}\n"),
                ProblemKind::out_of_range, "realtime.capture_priority");
+  only_problem(load(minimal_config() + "realtime: {cpu_dma_latency_us: -2}\n"),
+               ProblemKind::out_of_range, "realtime.cpu_dma_latency_us");
   // A warning, not an error: privileged ports work with CAP_NET_BIND_SERVICE.
   const auto low = load(edited("{udp: {}}", "{udp: {ports: {lidar: 999}}}"));
   const auto p = only_problem(low, ProblemKind::out_of_range, "sensors[0].source.udp.ports.lidar");
