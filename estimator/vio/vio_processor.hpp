@@ -58,6 +58,9 @@ struct VioTimings {
   double update_cpu_ms = 0.0;
   double map_cpu_ms = 0.0;
   double cpu_ms = 0.0;
+  // CPU time of the whole process over the image (the calling thread and the TaskRunner's workers
+  // together: the work the update costs; includes any other thread of the process that ran then).
+  double process_cpu_ms = 0.0;
 };
 
 // One drawn patch for --debug-images.
