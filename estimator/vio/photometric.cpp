@@ -85,7 +85,7 @@ void add_pixel(const PatchEval& e, int k, double huber, PixelSums& s) {
 // The per-pixel sums of accumulate_patch, with the kernel and the exposure column decided at
 // compile time. Two pixels at a time in two lanes of doubles (SSE2 / NEON; the compiler does not
 // vectorise the sums itself without reassociating them), lanes added at the end: the same sums
-// in another order, to the last bits. Without branches: the Huber weight min(1, huber / |r|) is
+// in another order, to the last bits. The Huber weight min(1, huber / |r|) is
 // huber / max(|r|, huber) (exactly 1 inside the kernel) and its cost huber (2 |r| - huber) beyond
 // it is r^2 - (|r| - huber)^2.
 template <bool kExposure, bool kRobust>
@@ -104,7 +104,10 @@ PixelSums pixel_sums(const PatchEval& e, double huber) {
     if constexpr (kRobust) {
       const V ar = r.abs();
       const V beyond = (ar - h).max(0.0);
-      w = h / ar.max(h);
+      // Inside the kernel the weight is h / h = 1 exactly: the division (the loop's slowest
+      // instruction) only for the pairs with a pixel beyond it (few: the kernel is at 1.345
+      // sigma of the noise, outliers aside).
+      if ((ar > h).any()) w = h / ar.max(h);
       cost += r2 - beyond * beyond;
     } else {
       cost += r2;

@@ -44,14 +44,15 @@ void sample_warped_fixed(const std::uint8_t* block, const Eigen::Vector2f& start
     const F ax = x - ix.cast<float>();
     const F ay = y - iy.cast<float>();
     const I at = iy * kS + ix;
-    I p00, p01, p10, p11;
-    for (int q = 0; q < 4; ++q) {
-      const std::uint8_t* r0 = block + at[q];
-      p00[q] = r0[0];
-      p01[q] = r0[1];
-      p10[q] = r0[kS];
-      p11[q] = r0[kS + 1];
-    }
+    // Built in registers: four scalar stores read back as one vector stall on store forwarding.
+    const std::uint8_t* r0 = block + at[0];
+    const std::uint8_t* r1 = block + at[1];
+    const std::uint8_t* r2 = block + at[2];
+    const std::uint8_t* r3 = block + at[3];
+    const I p00(r0[0], r1[0], r2[0], r3[0]);
+    const I p01(r0[1], r1[1], r2[1], r3[1]);
+    const I p10(r0[kS], r1[kS], r2[kS], r3[kS]);
+    const I p11(r0[kS + 1], r1[kS + 1], r2[kS + 1], r3[kS + 1]);
     const F bx = 1.0F - ax;
     const F v = (1.0F - ay) * (bx * p00.cast<float>() + ax * p01.cast<float>()) +
                 ay * (bx * p10.cast<float>() + ax * p11.cast<float>());
