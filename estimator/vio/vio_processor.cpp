@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -454,6 +455,30 @@ void VioProcessor::unit_patch(const PatchObservation& obs, float* out) const {
   const std::size_t n = static_cast<std::size_t>(P * P);
   const int start = (S - P) / 2;
   const std::uint8_t* b = obs.block(0, S);
+  if (P == 8) {
+    // 64 pixels: the mean is a multiple of 1/64, so every centred value v - mean is exact in
+    // float (d / 64 with d = 64 v - sum) and the double sum of their squares is exact too (at
+    // most 34 significant bits): integers give the same values as the general loop below.
+    std::int32_t sum8 = 0;
+    std::array<std::int32_t, 64> d;  // NOLINT: written below
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 8; ++x) {
+        d[static_cast<std::size_t>(y * 8 + x)] = b[(start + y) * S + start + x];
+      }
+    }
+    for (const std::int32_t v : d) sum8 += v;
+    std::int64_t sq = 0;
+    for (std::int32_t& v : d) {
+      v = 64 * v - sum8;
+      sq += static_cast<std::int64_t>(v) * v;
+    }
+    const double norm = static_cast<double>(sq) / 4096.0;
+    const float inv = norm > 1e-9 ? static_cast<float>(1.0 / std::sqrt(norm)) : 0.0F;
+    for (std::size_t k = 0; k < 64; ++k) {
+      out[k] = static_cast<float>(d[k]) * (1.0F / 64.0F) * inv;
+    }
+    return;
+  }
   std::uint32_t sum = 0;  // exact, as the double sum of the pixels is
   for (int y = 0; y < P; ++y) {
     for (int x = 0; x < P; ++x) {
