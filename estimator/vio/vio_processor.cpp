@@ -133,7 +133,7 @@ void VioProcessor::for_range(std::size_t n, std::size_t grain,
   }
 }
 
-void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3d>& scan_world) {
+void VioProcessor::project_scan(const State& x, const std::vector<CovPoint>& scan_world) {
   const Eigen::Isometry3d T_cw = extrinsic_.T_world_cam(x).inverse();
   const Eigen::Matrix3d R = T_cw.linear();
   const Eigen::Vector3d t = T_cw.translation();
@@ -145,7 +145,7 @@ void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3
   for_range(n, 2048, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       scan_range_[i] = -1.0F;
-      const Eigen::Vector3d pc = R * scan_world[i] + t;
+      const Eigen::Vector3d pc = R * scan_world[i].p + t;
       if (pc.z() <= 0.05) continue;
       // Outside the cone around the optical axis that holds the image: no projection needed.
       // Squared (z > 0 here): no square root for the points behind or beside the camera. The
@@ -156,19 +156,17 @@ void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3
       if (!px || !camera_.in_image(*px)) continue;
       scan_px_[i] = px->cast<float>();
       scan_range_[i] = static_cast<float>(std::sqrt(norm2));
-      scan_point_keys_[i] = map_.key(scan_world[i]);
+      scan_point_keys_[i] = map_.key(scan_world[i].p);
     }
   });
   // The visual voxels to look in: those of the scan's points in the image (FAST-LIVO2 takes the
   // voxels of the whole scan; the others hold nothing the camera sees).
+  // In the same pass, the sparse depth image: the nearest LiDAR return per cell.
   scan_keys_.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (scan_range_[i] >= 0.0F) scan_keys_.push_back(scan_point_keys_[i]);
-  }
-  // The sparse depth image: the nearest LiDAR return per cell.
   std::fill(depth_.begin(), depth_.end(), kInf);
   for (std::size_t i = 0; i < n; ++i) {
     if (scan_range_[i] < 0.0F) continue;
+    scan_keys_.push_back(scan_point_keys_[i]);
     const int cx = static_cast<int>(scan_px_[i].x()) / kDepthCell;
     const int cy = static_cast<int>(scan_px_[i].y()) / kDepthCell;
     float& d = depth_[static_cast<std::size_t>(cy * depth_cols_ + cx)];
@@ -263,6 +261,7 @@ void VioProcessor::select(const State& x, VioReport& report) {
     if (-ray.dot(vp.normal) < cos_max) continue;
     Patch patch;
     patch.id = id;
+    patch.p_world = vp.p_world;
     patch.px = px;
     patch.depth = depth;
     patch.cell = static_cast<int>(cell);
@@ -385,7 +384,7 @@ void VioProcessor::update(Belief& belief, double tau_start, VioReport& report) {
             const Patch& p = patches_[i];
             if (!p.used || ((p.level_mask >> level) & 1U) == 0) continue;
             PoseJacobian J;
-            const auto px = project_from_state(camera_, extrinsic_, x, map_.at(p.id).p_world, &J);
+            const auto px = project_from_state(camera_, extrinsic_, x, p.p_world, &J);
             if (!px) continue;
             const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(level) * n;
             if (!evaluate_patch(pyramid_.level(level), level, P, *px, x.inv_exposure, ref, e)) {
@@ -562,7 +561,7 @@ void VioProcessor::refine_normal(VisualPoint& point, const Eigen::Vector3d& came
   point.normal = n;
 }
 
-void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& scan_world,
+void VioProcessor::maintain(const State& x, const std::vector<CovPoint>& scan_world,
                             const std::vector<Eigen::Vector3d>& scan_normals,
                             const VoxelMap& lidar_map, VioReport& report) {
   const int P = params_.patch_size;
@@ -585,7 +584,7 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
       Patch& p = patches_[i];
       p.mse_after = -1.0;
       if (!p.used) continue;
-      const auto px = project_from_state(camera_, extrinsic_, x, map_.at(p.id).p_world);
+      const auto px = project_from_state(camera_, extrinsic_, x, p.p_world);
       if (!px) continue;
       const int l = lowest_level(p.level_mask);
       const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
@@ -718,7 +717,7 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
     if (best_index[cell] < 0 || best_score[cell] < params_.min_corner_score) continue;
     const auto i = static_cast<std::size_t>(best_index[cell]);
     VisualPoint vp;
-    vp.p_world = scan_world[i];
+    vp.p_world = scan_world[i].p;
     vp.normal = scan_normals[i].normalized();
     // On the LiDAR map's plane (mm-level) rather than the single noisy return, when it has one.
     PlaneMatch m;
@@ -748,7 +747,7 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
 }
 
 VioReport VioProcessor::process(const ImageFrame& frame, Belief& belief,
-                                const std::vector<Eigen::Vector3d>& scan_world,
+                                const std::vector<CovPoint>& scan_world,
                                 const std::vector<Eigen::Vector3d>& scan_normals,
                                 const VoxelMap& lidar_map, bool debug) {
   const auto t_total = Clock::now();
