@@ -258,10 +258,9 @@ void LioPipeline::propagate_to(const MeasurementGroup& group, ImuPoseTrack& trac
 
 void LioPipeline::visual_update(const MeasurementGroup& group, bool lio_matched,
                                 FrameReport& report) {
-  scan_world_.resize(world_points_.size());
-  for (std::size_t i = 0; i < world_points_.size(); ++i) scan_world_[i] = world_points_[i].p;
   const std::vector<Eigen::Vector3d>& normals = lio_matched ? p2p_->matched_normals() : no_normals_;
-  report.vio = vio_->process(group.image, belief_, scan_world_, normals, *map_, options_.vio_debug);
+  report.vio =
+      vio_->process(group.image, belief_, world_points_, normals, *map_, options_.vio_debug);
   if (!report.vio.ran) {
     ++images_rejected_;
     return;

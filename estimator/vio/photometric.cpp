@@ -85,7 +85,7 @@ void add_pixel(const PatchEval& e, int k, double huber, PixelSums& s) {
 // The per-pixel sums of accumulate_patch, with the kernel and the exposure column decided at
 // compile time. Two pixels at a time in two lanes of doubles (SSE2 / NEON; the compiler does not
 // vectorise the sums itself without reassociating them), lanes added at the end: the same sums
-// in another order, to the last bits. Without branches: the Huber weight min(1, huber / |r|) is
+// in another order, to the last bits. The Huber weight min(1, huber / |r|) is
 // huber / max(|r|, huber) (exactly 1 inside the kernel) and its cost huber (2 |r| - huber) beyond
 // it is r^2 - (|r| - huber)^2.
 template <bool kExposure, bool kRobust>
@@ -104,7 +104,10 @@ PixelSums pixel_sums(const PatchEval& e, double huber) {
     if constexpr (kRobust) {
       const V ar = r.abs();
       const V beyond = (ar - h).max(0.0);
-      w = h / ar.max(h);
+      // Inside the kernel the weight is h / h = 1 exactly: the division (the loop's slowest
+      // instruction) only for the pairs with a pixel beyond it (few: the kernel is at 1.345
+      // sigma of the noise, outliers aside).
+      if ((ar > h).any()) w = h / ar.max(h);
       cost += r2 - beyond * beyond;
     } else {
       cost += r2;
@@ -204,6 +207,33 @@ Eigen::Matrix<double, Eigen::Dynamic, 7> patch_jacobian(const PatchEval& e,
   return H;
 }
 
+namespace {
+
+// The integer structure-tensor sums of shi_tomasi_score over the window at (x0, y0); the edge as
+// a template parameter lets the compiler unroll and vectorise the rows (same integers).
+template <int kP>
+void structure_sums_fixed(const cv::Mat& image, int x0, int y0, std::int64_t& sxx,
+                          std::int64_t& sxy, std::int64_t& syy) {
+  std::int32_t xx = 0, xy = 0, yy = 0;  // at most kP^2 * 2 * 255^2: far below 2^31 for kP <= 16
+  for (int y = y0; y < y0 + kP; ++y) {
+    const std::uint8_t* row = image.ptr<std::uint8_t>(y) + x0;
+    const std::uint8_t* up = image.ptr<std::uint8_t>(y - 1) + x0;
+    const std::uint8_t* down = image.ptr<std::uint8_t>(y + 1) + x0;
+    for (int x = 0; x < kP; ++x) {
+      const std::int32_t dx = static_cast<std::int32_t>(row[x + 1]) - row[x - 1];
+      const std::int32_t dy = static_cast<std::int32_t>(down[x]) - up[x];
+      xx += dx * dx;
+      xy += dx * dy;
+      yy += dy * dy;
+    }
+  }
+  sxx = xx;
+  sxy = xy;
+  syy = yy;
+}
+
+}  // namespace
+
 double shi_tomasi_score(const cv::Mat& image, const Eigen::Vector2d& px, int patch_size) {
   const int half = patch_size / 2;
   const int x0 = static_cast<int>(std::lround(px.x())) - half;
@@ -214,16 +244,20 @@ double shi_tomasi_score(const cv::Mat& image, const Eigen::Vector2d& px, int pat
   // Integer sums of the doubled central differences: exact, as the double sums of the halved
   // ones are (quarter-integers far below 2^53), so the score is the same, for less work.
   std::int64_t sxx = 0, sxy = 0, syy = 0;  // no overflow for any window the image holds
-  for (int y = y0; y < y0 + patch_size; ++y) {
-    const std::uint8_t* row = image.ptr<std::uint8_t>(y);
-    const std::uint8_t* up = image.ptr<std::uint8_t>(y - 1);
-    const std::uint8_t* down = image.ptr<std::uint8_t>(y + 1);
-    for (int x = x0; x < x0 + patch_size; ++x) {
-      const std::int32_t dx = static_cast<std::int32_t>(row[x + 1]) - row[x - 1];
-      const std::int32_t dy = static_cast<std::int32_t>(down[x]) - up[x];
-      sxx += dx * dx;
-      sxy += dx * dy;
-      syy += dy * dy;
+  if (patch_size == 8) {
+    structure_sums_fixed<8>(image, x0, y0, sxx, sxy, syy);
+  } else {
+    for (int y = y0; y < y0 + patch_size; ++y) {
+      const std::uint8_t* row = image.ptr<std::uint8_t>(y);
+      const std::uint8_t* up = image.ptr<std::uint8_t>(y - 1);
+      const std::uint8_t* down = image.ptr<std::uint8_t>(y + 1);
+      for (int x = x0; x < x0 + patch_size; ++x) {
+        const std::int32_t dx = static_cast<std::int32_t>(row[x + 1]) - row[x - 1];
+        const std::int32_t dy = static_cast<std::int32_t>(down[x]) - up[x];
+        sxx += dx * dx;
+        sxy += dx * dy;
+        syy += dy * dy;
+      }
     }
   }
   double xx = 0.25 * static_cast<double>(sxx);

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -23,10 +24,14 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-double thread_cpu_ms() {
+double cpu_ms(clockid_t clock) {
   timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  clock_gettime(clock, &ts);
   return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
+double thread_cpu_ms() {
+  return cpu_ms(CLOCK_THREAD_CPUTIME_ID);
 }
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -128,7 +133,7 @@ void VioProcessor::for_range(std::size_t n, std::size_t grain,
   }
 }
 
-void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3d>& scan_world) {
+void VioProcessor::project_scan(const State& x, const std::vector<CovPoint>& scan_world) {
   const Eigen::Isometry3d T_cw = extrinsic_.T_world_cam(x).inverse();
   const Eigen::Matrix3d R = T_cw.linear();
   const Eigen::Vector3d t = T_cw.translation();
@@ -140,27 +145,28 @@ void VioProcessor::project_scan(const State& x, const std::vector<Eigen::Vector3
   for_range(n, 2048, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       scan_range_[i] = -1.0F;
-      const Eigen::Vector3d pc = R * scan_world[i] + t;
+      const Eigen::Vector3d pc = R * scan_world[i].p + t;
       if (pc.z() <= 0.05) continue;
       // Outside the cone around the optical axis that holds the image: no projection needed.
-      if (pc.z() < cos_fov * pc.norm()) continue;
+      // Squared (z > 0 here): no square root for the points behind or beside the camera. The
+      // cone has a 2 deg margin around the image, so rounding at its edge changes nothing.
+      const double norm2 = pc.squaredNorm();
+      if (cos_fov > 0.0 && pc.z() * pc.z() < cos_fov * cos_fov * norm2) continue;
       const auto px = camera_.project(pc);
       if (!px || !camera_.in_image(*px)) continue;
       scan_px_[i] = px->cast<float>();
-      scan_range_[i] = static_cast<float>(pc.norm());
-      scan_point_keys_[i] = map_.key(scan_world[i]);
+      scan_range_[i] = static_cast<float>(std::sqrt(norm2));
+      scan_point_keys_[i] = map_.key(scan_world[i].p);
     }
   });
   // The visual voxels to look in: those of the scan's points in the image (FAST-LIVO2 takes the
   // voxels of the whole scan; the others hold nothing the camera sees).
+  // In the same pass, the sparse depth image: the nearest LiDAR return per cell.
   scan_keys_.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (scan_range_[i] >= 0.0F) scan_keys_.push_back(scan_point_keys_[i]);
-  }
-  // The sparse depth image: the nearest LiDAR return per cell.
   std::fill(depth_.begin(), depth_.end(), kInf);
   for (std::size_t i = 0; i < n; ++i) {
     if (scan_range_[i] < 0.0F) continue;
+    scan_keys_.push_back(scan_point_keys_[i]);
     const int cx = static_cast<int>(scan_px_[i].x()) / kDepthCell;
     const int cy = static_cast<int>(scan_px_[i].y()) / kDepthCell;
     float& d = depth_[static_cast<std::size_t>(cy * depth_cols_ + cx)];
@@ -255,6 +261,7 @@ void VioProcessor::select(const State& x, VioReport& report) {
     if (-ray.dot(vp.normal) < cos_max) continue;
     Patch patch;
     patch.id = id;
+    patch.p_world = vp.p_world;
     patch.px = px;
     patch.depth = depth;
     patch.cell = static_cast<int>(cell);
@@ -377,7 +384,7 @@ void VioProcessor::update(Belief& belief, double tau_start, VioReport& report) {
             const Patch& p = patches_[i];
             if (!p.used || ((p.level_mask >> level) & 1U) == 0) continue;
             PoseJacobian J;
-            const auto px = project_from_state(camera_, extrinsic_, x, map_.at(p.id).p_world, &J);
+            const auto px = project_from_state(camera_, extrinsic_, x, p.p_world, &J);
             if (!px) continue;
             const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(level) * n;
             if (!evaluate_patch(pyramid_.level(level), level, P, *px, x.inv_exposure, ref, e)) {
@@ -447,6 +454,30 @@ void VioProcessor::unit_patch(const PatchObservation& obs, float* out) const {
   const std::size_t n = static_cast<std::size_t>(P * P);
   const int start = (S - P) / 2;
   const std::uint8_t* b = obs.block(0, S);
+  if (P == 8) {
+    // 64 pixels: the mean is a multiple of 1/64, so every centred value v - mean is exact in
+    // float (d / 64 with d = 64 v - sum) and the double sum of their squares is exact too (at
+    // most 34 significant bits): integers give the same values as the general loop below.
+    std::int32_t sum8 = 0;
+    std::array<std::int32_t, 64> d;  // NOLINT: written below
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 8; ++x) {
+        d[static_cast<std::size_t>(y * 8 + x)] = b[(start + y) * S + start + x];
+      }
+    }
+    for (const std::int32_t v : d) sum8 += v;
+    std::int64_t sq = 0;
+    for (std::int32_t& v : d) {
+      v = 64 * v - sum8;
+      sq += static_cast<std::int64_t>(v) * v;
+    }
+    const double norm = static_cast<double>(sq) / 4096.0;
+    const float inv = norm > 1e-9 ? static_cast<float>(1.0 / std::sqrt(norm)) : 0.0F;
+    for (std::size_t k = 0; k < 64; ++k) {
+      out[k] = static_cast<float>(d[k]) * (1.0F / 64.0F) * inv;
+    }
+    return;
+  }
   std::uint32_t sum = 0;  // exact, as the double sum of the pixels is
   for (int y = 0; y < P; ++y) {
     for (int x = 0; x < P; ++x) {
@@ -530,7 +561,7 @@ void VioProcessor::refine_normal(VisualPoint& point, const Eigen::Vector3d& came
   point.normal = n;
 }
 
-void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& scan_world,
+void VioProcessor::maintain(const State& x, const std::vector<CovPoint>& scan_world,
                             const std::vector<Eigen::Vector3d>& scan_normals,
                             const VoxelMap& lidar_map, VioReport& report) {
   const int P = params_.patch_size;
@@ -553,7 +584,7 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
       Patch& p = patches_[i];
       p.mse_after = -1.0;
       if (!p.used) continue;
-      const auto px = project_from_state(camera_, extrinsic_, x, map_.at(p.id).p_world);
+      const auto px = project_from_state(camera_, extrinsic_, x, p.p_world);
       if (!px) continue;
       const int l = lowest_level(p.level_mask);
       const float* ref = refs_.data() + p.ref_offset + static_cast<std::size_t>(l) * n;
@@ -686,7 +717,7 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
     if (best_index[cell] < 0 || best_score[cell] < params_.min_corner_score) continue;
     const auto i = static_cast<std::size_t>(best_index[cell]);
     VisualPoint vp;
-    vp.p_world = scan_world[i];
+    vp.p_world = scan_world[i].p;
     vp.normal = scan_normals[i].normalized();
     // On the LiDAR map's plane (mm-level) rather than the single noisy return, when it has one.
     PlaneMatch m;
@@ -716,11 +747,12 @@ void VioProcessor::maintain(const State& x, const std::vector<Eigen::Vector3d>& 
 }
 
 VioReport VioProcessor::process(const ImageFrame& frame, Belief& belief,
-                                const std::vector<Eigen::Vector3d>& scan_world,
+                                const std::vector<CovPoint>& scan_world,
                                 const std::vector<Eigen::Vector3d>& scan_normals,
                                 const VoxelMap& lidar_map, bool debug) {
   const auto t_total = Clock::now();
   const double cpu0 = thread_cpu_ms();
+  const double process_cpu0 = cpu_ms(CLOCK_PROCESS_CPUTIME_ID);
   VioReport report;
   debug_ = debug;
   auto t0 = Clock::now();
@@ -752,6 +784,7 @@ VioReport VioProcessor::process(const ImageFrame& frame, Belief& belief,
   report.inv_exposure = belief.x.inv_exposure;
   report.timings.total_ms = ms_since(t_total);
   report.timings.cpu_ms = thread_cpu_ms() - cpu0;
+  report.timings.process_cpu_ms = cpu_ms(CLOCK_PROCESS_CPUTIME_ID) - process_cpu0;
   return report;
 }
 

@@ -58,6 +58,9 @@ struct VioTimings {
   double update_cpu_ms = 0.0;
   double map_cpu_ms = 0.0;
   double cpu_ms = 0.0;
+  // CPU time of the whole process over the image (the calling thread and the TaskRunner's workers
+  // together: the work the update costs; includes any other thread of the process that ran then).
+  double process_cpu_ms = 0.0;
 };
 
 // One drawn patch for --debug-images.
@@ -97,9 +100,10 @@ class VioProcessor {
 
   // Processes one image taken at the belief's time (the pipeline has just propagated and run the
   // LIO update to it). scan_world / scan_normals: the scan's points in the world after that
-  // update and the normals of the planes they matched (zero: none). Updates `belief`.
+  // update (positions `p`; read where they are, the scan is not copied) and the normals of the
+  // planes they matched (zero: none). Updates `belief`.
   VioReport process(const ImageFrame& frame, Belief& belief,
-                    const std::vector<Eigen::Vector3d>& scan_world,
+                    const std::vector<CovPoint>& scan_world,
                     const std::vector<Eigen::Vector3d>& scan_normals, const VoxelMap& lidar_map,
                     bool debug);
 
@@ -117,7 +121,7 @@ class VioProcessor {
   struct Patch;
   bool prepare_image(const ImageFrame& frame, VioReport& report);
   // Projects the scan (at the prior pose) once: pixels, ranges, visual voxel keys, depth image.
-  void project_scan(const State& x, const std::vector<Eigen::Vector3d>& scan_world);
+  void project_scan(const State& x, const std::vector<CovPoint>& scan_world);
   void for_range(std::size_t n, std::size_t grain,
                  const std::function<void(std::size_t, std::size_t)>& fn) const;
   [[nodiscard]] bool near_depth_jump(const Eigen::Vector2d& px, double depth) const;
@@ -126,7 +130,7 @@ class VioProcessor {
   bool warp_reference(const State& x, Patch& patch, float* out) const;
   double gate(const State& x, VioReport& report);
   void update(Belief& belief, double tau_start, VioReport& report);
-  void maintain(const State& x, const std::vector<Eigen::Vector3d>& scan_world,
+  void maintain(const State& x, const std::vector<CovPoint>& scan_world,
                 const std::vector<Eigen::Vector3d>& scan_normals, const VoxelMap& lidar_map,
                 VioReport& report);
   bool capture(const State& x, const Eigen::Vector2d& px, PatchObservation& obs) const;
@@ -161,7 +165,8 @@ class VioProcessor {
   std::vector<std::int32_t> cell_point_;  // per grid cell: index into patches_, -1: none
   std::vector<float> cell_depth_;
   struct Patch {
-    std::uint32_t id = 0;  // visual point
+    std::uint32_t id = 0;                               // visual point
+    Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  // its position (no map lookup per step)
     Eigen::Vector2d px = Eigen::Vector2d::Zero();
     double depth = 0.0;
     int cell = 0;
