@@ -111,8 +111,10 @@ TEST(MultiLidarReplay, Vlp16PlusAviaStreetBeatsBothLidarsAlone) {
 // The corridor with side rooms: the forward Avia sees uniform walls, floor and ceiling, and faces
 // along x only as slivers through the doorways; the Avia looking left sees into the rooms. With
 // it, half as many frames are degenerate (measured, 16 s: 11 % against 23 %). The trajectory is
-// not more accurate in this world (ATE 6.6 mm against 6.2 mm): the slivers keep the forward
-// LiDAR alone from drifting much, so the check on accuracy is that the pair stays comparable.
+// not more accurate on this seed (ATE 6.6 mm against 6.2 mm) and over seeds it goes either way
+// (seeds 1-5: pair 6.6, 4.7, 10.3, 6.4, 7.8 mm; forward alone 6.2, 7.4, 5.9, 7.9, 12.6 mm): the
+// slivers keep the forward LiDAR alone from drifting much, so the check on accuracy is that the
+// pair stays comparable.
 TEST(MultiLidarReplay, SidewaysLidarConstrainsTheCorridor) {
   const sim::Scenario scenario = sim::make_scenario("corridor_side_rooms_dual_avia");
   if (!test::scenario_runnable(scenario)) GTEST_SKIP() << "Avia not simulated";
