@@ -572,7 +572,7 @@ constexpr std::array<const char*, 10> kDriverSections = {
     "source", "metadata", "calibration", "frame_cut", "imu",
     "lio",    "camera",   "can",         "serial",    "dataset"};
 
-// A LiDAR's own point settings in the estimator (docs/configuration.md "Per-LiDAR point model"):
+// A LiDAR's own point settings in the estimator (docs/configuration.md, "`lio`" of a sensor):
 // the same ranges as estimator.lio's keys.
 void read_lidar_lio(MapReader& m, estimator::LidarLioParams& lio) {
   double dept_err = 0.0;
