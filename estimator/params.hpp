@@ -7,6 +7,7 @@
 // This header must not depend on the configuration loader or on YAML: the daemon fills these
 // structs from the config file, tests and benchmarks fill them in code.
 
+#include <optional>
 #include <vector>
 
 namespace livod::estimator {
@@ -64,6 +65,17 @@ struct LioParams {
   double blind = 0.8;             // minimum range (m)
   double filter_size_surf = 0.1;  // scan voxel-grid downsampling (m); 0 disables
   ConvergenceParams convergence;
+};
+
+// One LiDAR's own point settings where several LiDARs feed the estimator (docs/estimator.md
+// "Several LiDARs"): an unset noise value is LioParams' (the estimator-wide one).
+struct LidarLioParams {
+  std::optional<double> dept_err;      // range noise sigma (m) of this LiDAR's points
+  std::optional<double> beam_err_deg;  // bearing noise sigma (deg) of this LiDAR's points
+  // Its points are inserted into the map. false: they are matched against the planes the other
+  // LiDARs build, and build none (a sparse spinning LiDAR cuts a voxel in single-ring lines,
+  // which pass the planarity test as planes whose tilt about the line is unobserved).
+  bool build_map = true;
 };
 
 // The voxel map slides with the robot so that memory stays bounded.

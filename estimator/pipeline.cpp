@@ -1,5 +1,6 @@
 #include "estimator/pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 #include <string>
@@ -22,10 +23,10 @@ IterationParams iteration_params(const LioParams& lio) {
   return p;
 }
 
-PointNoise point_noise(const LioParams& lio) {
+PointNoise point_noise(const LioParams& lio, const LidarLioParams& own = {}) {
   PointNoise n;
-  n.range_sigma_m = lio.dept_err;
-  n.bearing_sigma_rad = lio.beam_err_deg * M_PI / 180.0;
+  n.range_sigma_m = own.dept_err.value_or(lio.dept_err);
+  n.bearing_sigma_rad = own.beam_err_deg.value_or(lio.beam_err_deg) * M_PI / 180.0;
   n.max_incidence_rad = lio.max_incidence_deg * M_PI / 180.0;
   return n;
 }
@@ -54,9 +55,23 @@ LioPipeline::LioPipeline(PipelineOptions options)
     throw std::invalid_argument(
         "LioPipeline: the visual update runs with one LiDAR only (several LiDARs: LIO)");
   }
+  if (options_.lidar_lio.size() > T_imu_lidars_.size()) {
+    throw std::invalid_argument("LioPipeline: more per-LiDAR settings than LiDARs");
+  }
+  options_.lidar_lio.resize(T_imu_lidars_.size());
+  if (std::none_of(options_.lidar_lio.begin(), options_.lidar_lio.end(),
+                   [](const LidarLioParams& l) { return l.build_map; })) {
+    throw std::invalid_argument("LioPipeline: no LiDAR builds the map");
+  }
   p2p_ = std::make_unique<PointToPlane>(*map_, T_imu_lidars_, options_.runner,
                                         point_noise(options_.params.lio),
                                         options_.params.lio.incidence_term);
+  for (std::size_t l = 0; l < T_imu_lidars_.size(); ++l) {
+    noise_[l] = point_noise(options_.params.lio, options_.lidar_lio[l]);
+    p2p_->set_lidar_noise(l, noise_[l]);
+  }
+  builds_map_all_ = std::all_of(options_.lidar_lio.begin(), options_.lidar_lio.end(),
+                                [](const LidarLioParams& l) { return l.build_map; });
   if (options_.camera && options_.params.vio.enabled) {
     vio_ = std::make_unique<vio::VioProcessor>(options_.params.vio, options_.params.map,
                                                *options_.camera, options_.runner);
@@ -352,12 +367,12 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   // Residuals: the points' covariances, then association and residual rows at every iteration;
   // update: the rest of the iterated update (the solves).
   t0 = std::chrono::steady_clock::now();
-  const PointNoise noise = point_noise(lio);
   scan_points_.resize(undistorted_.size());
   for_points(undistorted_.size(), [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       scan_points_[i].p_lidar = undistorted_[i];
-      scan_points_[i].cov_lidar = point_covariance(undistorted_[i], noise);
+      // The range/bearing model of the point's own LiDAR.
+      scan_points_[i].cov_lidar = point_covariance(undistorted_[i], noise_[point_lidar_[i]]);
       scan_points_[i].lidar = point_lidar_[i];
     }
   });
@@ -416,14 +431,25 @@ void LioPipeline::process_group(const MeasurementGroup& group,
       // A point that matched a plane knows its surface: its covariance gets the incidence term.
       const Eigen::Matrix3d cov_l =
           incidence && matched && !(*normals)[i].isZero()
-              ? point_covariance(p_l, noise, Eigen::Vector3d(R_wl[l].transpose() * (*normals)[i]))
+              ? point_covariance(p_l, noise_[l],
+                                 Eigen::Vector3d(R_wl[l].transpose() * (*normals)[i]))
               : scan_points_[i].cov_lidar;
       world_points_[i].p = R * p_i + belief_.x.p_world_imu;
       world_points_[i].cov =
           R_wl[l] * cov_l * R_wl[l].transpose() + J_rot * P_rot * J_rot.transpose() + P_pos;
     }
   });
-  map_->insert(world_points_, options_.runner);
+  if (builds_map_all_) {
+    map_->insert(world_points_, options_.runner);
+  } else {
+    // Only the points of the LiDARs that build the map (LidarLioParams::build_map).
+    map_points_.clear();
+    for (std::size_t i = 0; i < world_points_.size(); ++i) {
+      if (options_.lidar_lio[scan_points_[i].lidar].build_map)
+        map_points_.push_back(world_points_[i]);
+    }
+    map_->insert(map_points_, options_.runner);
+  }
   map_->slide(belief_.x.p_world_imu);
   report.timings.map_ms = ms_since(t0);
 

@@ -14,6 +14,7 @@
 // update over all of them (docs/estimator.md "Several LiDARs"). LIO only: no camera then.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -44,6 +45,9 @@ struct PipelineOptions {
   // Further LiDARs: LiDAR i >= 1 (add_scan's `lidar`) is at T_imu_more_lidars[i - 1]. At most
   // kMaxLidars in all; with any, `camera` must be unset or VIO disabled (the constructor throws).
   std::vector<Eigen::Isometry3d> T_imu_more_lidars;
+  // Each LiDAR's own point settings, by the same index (0: the reference LiDAR); missing entries
+  // are the defaults (params.lio's noise, building the map).
+  std::vector<LidarLioParams> lidar_lio;
   double lidar_wait_s = 0.05;  // SyncParams::lidar_wait_s
   // Runs residual rows, point covariances and map refits in parallel (the daemon's worker pool);
   // nullptr: everything on the caller's thread. Results are the same either way. Must outlive the
@@ -217,6 +221,9 @@ class LioPipeline {
   MeasurementGroup group_;  // the group being processed (its IMU vector keeps its capacity)
   std::unique_ptr<VoxelMap> map_;
   std::unique_ptr<PointToPlane> p2p_;
+  std::array<PointNoise, kMaxLidars> noise_{};  // each LiDAR's point noise model
+  bool builds_map_all_ = true;                  // every LiDAR's points go into the map
+  std::vector<CovPoint> map_points_;            // the points that do (when not all LiDARs build)
   VoxelGridDownsampler downsampler_;
   SpatialOrder spatial_order_;
   Belief belief_;

@@ -373,6 +373,7 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
                        const std::vector<SensorSite>& sites) {
   int first_lidar = -1;
   std::size_t enabled_lidars = 0;
+  std::size_t lidars_building_map = 0;
   int first_camera = -1;
   // The visual update runs when VIO is enabled and a camera is.
   bool visual_update = false;
@@ -408,6 +409,7 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
         // Every enabled LiDAR feeds the estimator (docs/estimator.md "Several LiDARs"), up to
         // estimator::kMaxLidars, and LiDAR-inertial only: the visual update takes one LiDAR's scan.
         ++enabled_lidars;
+        if (s.lio.build_map) ++lidars_building_map;
         if (first_lidar < 0) {
           first_lidar = static_cast<int>(i);
         } else if (enabled_lidars > estimator::kMaxLidars) {
@@ -435,6 +437,19 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
     }
     // Live devices (cameras, CAN and serial IMUs) run in `livod run` (daemon/runtime/live_*);
     // their recordings (candump logs, serial captures, image folders) replay.
+  }
+  if (enabled_lidars > 0 && lidars_building_map == 0) {
+    // Some LiDAR must insert its points: with none, the map stays empty and nothing matches.
+    for (std::size_t i = 0; i < sites.size(); ++i) {
+      const SensorConfig& s = config.sensors[i];
+      if (!sites[i].driver_known || !s.enabled || sensor_kind(s.driver) != SensorKind::lidar) {
+        continue;
+      }
+      problems.error(ProblemKind::inconsistent, sites[i].path + ".lio.build_map", sites[i].at,
+                     sensor_label(sites, config, i) +
+                         " has lio.build_map: false and no other enabled LiDAR builds the map: "
+                         "at least one LiDAR must (its points are what the others match)");
+    }
   }
 }
 

@@ -205,6 +205,9 @@ struct SensorConfig {
   ClockConfig clock;
   int ring_capacity = 0;  // packets / samples / frames; default depends on the sensor kind
   InternalImuConfig imu;
+  // LiDARs: this LiDAR's own point settings in the estimator (`lio:`; unset noise values are
+  // estimator.lio's).
+  estimator::LidarLioParams lio;
   CameraConfig camera;
   CanConfig can;
   SerialConfig serial;

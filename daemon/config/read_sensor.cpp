@@ -568,8 +568,20 @@ void read_dataset(MapReader& d, Driver driver, DatasetConfig& dataset) {
 
 // The sections whose applicability depends on the driver; with an unknown driver they are only
 // declared, so that one wrong driver name gives one problem.
-constexpr std::array<const char*, 9> kDriverSections = {
-    "source", "metadata", "calibration", "frame_cut", "imu", "camera", "can", "serial", "dataset"};
+constexpr std::array<const char*, 10> kDriverSections = {
+    "source", "metadata", "calibration", "frame_cut", "imu",
+    "lio",    "camera",   "can",         "serial",    "dataset"};
+
+// A LiDAR's own point settings in the estimator (docs/configuration.md, "`lio`" of a sensor):
+// the same ranges as estimator.lio's keys.
+void read_lidar_lio(MapReader& m, estimator::LidarLioParams& lio) {
+  double dept_err = 0.0;
+  if (m.read("dept_err", dept_err, left_open(0.0, 1.0))) lio.dept_err = dept_err;
+  double beam_err_deg = 0.0;
+  if (m.read("beam_err_deg", beam_err_deg, left_open(0.0, 5.0))) lio.beam_err_deg = beam_err_deg;
+  m.read("build_map", lio.build_map);
+  m.finish();
+}
 
 }  // namespace
 
@@ -738,6 +750,11 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
       }
     }
     i.finish();
+  }
+
+  if (const auto v = take_applicable(m, "lio", kind == SensorKind::lidar, "LiDARs")) {
+    MapReader l(problems, v->node, v->path, v->at);
+    read_lidar_lio(l, sensor.lio);
   }
 
   const bool camera = kind == SensorKind::camera;

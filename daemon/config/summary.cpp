@@ -68,6 +68,10 @@ std::string summarize_config(const LivodConfig& config) {
   std::size_t enabled = 0;
   for (const auto& s : config.sensors) enabled += s.enabled ? 1 : 0;
   out << "sensors: " << config.sensors.size() << " (" << enabled << " enabled)\n";
+  std::size_t enabled_lidars = 0;
+  for (const auto& s : config.sensors) {
+    enabled_lidars += s.enabled && sensor_kind(s.driver) == SensorKind::lidar ? 1 : 0;
+  }
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
     const SensorConfig& s = config.sensors[i];
     out << "  " << s.name << ": " << enum_name(s.driver);
@@ -89,6 +93,16 @@ std::string summarize_config(const LivodConfig& config) {
       out << ", T_body_sensor " << describe_pose(s.T_body_sensor);
     }
     if (s.time_offset_s != 0.0) out << ", time offset " << s.time_offset_s << " s";
+    const bool own_lio = s.lio.dept_err || s.lio.beam_err_deg || !s.lio.build_map;
+    if (sensor_kind(s.driver) == SensorKind::lidar && (enabled_lidars > 1 || own_lio)) {
+      // Each LiDAR's point model, and where it comes from (its own lio: or estimator.lio).
+      const auto& lio = config.estimator.lio;
+      out << ", point noise: range " << s.lio.dept_err.value_or(lio.dept_err) << " m"
+          << (s.lio.dept_err ? "" : " (estimator.lio)") << ", bearing "
+          << s.lio.beam_err_deg.value_or(lio.beam_err_deg) << " deg"
+          << (s.lio.beam_err_deg ? "" : " (estimator.lio)")
+          << (s.lio.build_map ? ", builds the map" : ", matched only (does not build the map)");
+    }
     out << '\n';
   }
   const auto& lcm = config.outputs.lcm;

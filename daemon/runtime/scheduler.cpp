@@ -133,6 +133,9 @@ Scheduler::Scheduler(const LivodConfig& config, std::vector<SensorInput> inputs,
   po.params = config_.estimator;
   po.T_imu_lidar = roles_.T_imu_lidar;
   po.T_imu_more_lidars.assign(roles_.T_imu_lidars.begin() + 1, roles_.T_imu_lidars.end());
+  for (const int l : roles_.lidars) {
+    po.lidar_lio.push_back(config_.sensors[static_cast<std::size_t>(l)].lio);
+  }
   po.runner = runner;
   po.max_queued_scans = options_.max_queued_scans;
   if (roles_.camera >= 0) {

@@ -26,15 +26,19 @@ PointToPlane::PointToPlane(const VoxelMap& map, const Eigen::Isometry3d& T_imu_l
 
 PointToPlane::PointToPlane(const VoxelMap& map, std::vector<Eigen::Isometry3d> T_imu_lidars,
                            TaskRunner* runner, const PointNoise& noise, bool incidence)
-    : map_(map),
-      T_imu_lidars_(std::move(T_imu_lidars)),
-      runner_(runner),
-      noise_(noise),
-      incidence_(incidence) {
+    : map_(map), T_imu_lidars_(std::move(T_imu_lidars)), runner_(runner), incidence_(incidence) {
   if (T_imu_lidars_.empty() || T_imu_lidars_.size() > kMaxLidars) {
     throw std::invalid_argument("PointToPlane: between 1 and " + std::to_string(kMaxLidars) +
                                 " LiDAR extrinsics");
   }
+  noise_.fill(noise);
+}
+
+void PointToPlane::set_lidar_noise(std::size_t lidar, const PointNoise& noise) {
+  if (lidar >= T_imu_lidars_.size()) {
+    throw std::invalid_argument("PointToPlane: no LiDAR " + std::to_string(lidar));
+  }
+  noise_[lidar] = noise;
 }
 
 void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const State& x,
@@ -52,7 +56,10 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
     R_wl[l] = R * T_imu_lidars_[l].linear();
     t_wl[l] = R * T_imu_lidars_[l].translation() + x.p_world_imu;
   }
-  const double max_tan2 = std::pow(std::tan(noise_.max_incidence_rad), 2);
+  double max_tan2[kMaxLidars];
+  for (std::size_t l = 0; l < lidars; ++l) {
+    max_tan2[l] = std::pow(std::tan(noise_[l].max_incidence_rad), 2);
+  }
   const auto world = [&](std::size_t i) -> Eigen::Vector3d {
     const std::uint32_t l = points[i].lidar;
     return R_wl[l] * points[i].p_lidar + t_wl[l];
@@ -81,8 +88,9 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
       const double r = p_l.norm();
       if (r > 0.0) {
         q.ray = R_wl[l] * (p_l / r);
-        q.incidence_var = r * r * noise_.bearing_sigma_rad * noise_.bearing_sigma_rad;
-        q.max_tan2 = max_tan2;
+        const double sigma_b = noise_[l].bearing_sigma_rad;  // the point's own LiDAR's
+        q.incidence_var = r * r * sigma_b * sigma_b;
+        q.max_tan2 = max_tan2[l];
       }
     }
     normals_[i].setZero();

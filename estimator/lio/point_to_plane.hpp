@@ -11,6 +11,7 @@
 // per-point array and summed in point order, so the result does not depend on the thread count.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -54,6 +55,10 @@ class PointToPlane {
   PointToPlane(const VoxelMap& map, std::vector<Eigen::Isometry3d> T_imu_lidars, TaskRunner* runner,
                const PointNoise& noise = {}, bool incidence = false);
 
+  // Several LiDARs: the noise model of one LiDAR's points (its incidence term), when it differs
+  // from the constructor's.
+  void set_lidar_noise(std::size_t lidar, const PointNoise& noise);
+
   // Accumulates the normal equations of every matched point at state x.
   bool linearize(const std::vector<ScanPoint>& points, const State& x, NormalEquations& eq,
                  int min_matches);
@@ -80,7 +85,7 @@ class PointToPlane {
   const VoxelMap& map_;
   std::vector<Eigen::Isometry3d> T_imu_lidars_;
   TaskRunner* runner_;
-  PointNoise noise_;
+  std::array<PointNoise, kMaxLidars> noise_;  // per LiDAR
   bool incidence_;
   std::vector<Eigen::Vector3d> normals_;
   std::vector<Block> blocks_;

@@ -100,6 +100,54 @@ TEST(PointToPlane, UpdateRecoversAKnownPoseOffsetInAWellConstrainedRoom) {
   EXPECT_FALSE(deg.degenerate) << deg.translation_eigenvalues.transpose();
 }
 
+// Several LiDARs: each point's incidence term uses its own LiDAR's bearing noise (set_lidar_noise)
+// and ray. The rows of LiDAR 1's points in a two-LiDAR PointToPlane equal those of a one-LiDAR
+// PointToPlane with LiDAR 1's extrinsic and noise, and differ from those with LiDAR 0's noise.
+TEST(PointToPlane, EachLidarsPointsUseItsOwnNoise) {
+  std::mt19937 rng(11);
+  LioParams lio;
+  VoxelMap map(lio, MapParams{});
+  map.insert(floor_and_walls(rng, 60000));
+  State x;
+  x.R_world_imu = so3::exp(Eigen::Vector3d(0.01, -0.02, 0.2));
+  x.p_world_imu = Eigen::Vector3d(0.3, -0.2, 1.1);
+  Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T1 = Eigen::Isometry3d::Identity();
+  T1.linear() = so3::exp(Eigen::Vector3d(0.0, 0.3, 3.0));
+  T1.translation() = Eigen::Vector3d(-0.4, 0.1, 0.05);
+  PointNoise fine;  // an Avia-like bearing noise
+  fine.bearing_sigma_rad = 0.05 * M_PI / 180.0;
+  PointNoise coarse = fine;  // a wider beam
+  coarse.bearing_sigma_rad = 0.3 * M_PI / 180.0;
+  std::vector<ScanPoint> scan;
+  for (const CovPoint& w : floor_and_walls(rng, 2000)) {
+    ScanPoint s;
+    const Eigen::Vector3d p_imu = x.R_world_imu.transpose() * (w.p - x.p_world_imu);
+    s.p_lidar = T1.inverse() * p_imu;
+    s.cov_lidar = point_covariance(s.p_lidar, coarse);
+    s.lidar = 1;
+    scan.push_back(s);
+  }
+  PointToPlane pair(map, std::vector<Eigen::Isometry3d>{T0, T1}, nullptr, fine, true);
+  pair.set_lidar_noise(1, coarse);
+  std::vector<ScanPoint> alone_scan = scan;
+  for (auto& s : alone_scan) s.lidar = 0;
+  PointToPlane alone(map, T1, nullptr, coarse, true);
+  PointToPlane wrong(map, T1, nullptr, fine, true);
+  NormalEquations eq_pair, eq_alone, eq_wrong;
+  ASSERT_TRUE(pair.linearize(scan, x, eq_pair, 50));
+  ASSERT_TRUE(alone.linearize(alone_scan, x, eq_alone, 50));
+  ASSERT_TRUE(wrong.linearize(alone_scan, x, eq_wrong, 50));
+  EXPECT_EQ(eq_pair.measurements, eq_alone.measurements);
+  const double scale = eq_alone.HtRinvH.norm();
+  EXPECT_LT((eq_pair.HtRinvH - eq_alone.HtRinvH).norm(), 1e-9 * scale);
+  EXPECT_NEAR(eq_pair.weighted_sq_residual, eq_alone.weighted_sq_residual,
+              1e-9 * eq_alone.weighted_sq_residual + 1e-12);
+  // The wider beam weighs the rows less: the test would see the wrong noise.
+  EXPECT_GT((eq_wrong.HtRinvH - eq_alone.HtRinvH).norm(), 1e-3 * scale);
+  EXPECT_THROW(pair.set_lidar_noise(2, coarse), std::invalid_argument);
+}
+
 TEST(PointToPlane, DegeneracyFlagsACorridor) {
   // Information from two parallel walls and a floor: nothing constrains x.
   StateMatrix info = StateMatrix::Zero();

@@ -23,17 +23,21 @@ struct LidarRun {
   daemon::replay::ReplaySummary summary;
 };
 
-// The folder's config.yaml with `disabled` sensors switched off (enabled: false), replayed and
-// evaluated against the folder's ground truth.
+// The folder's config.yaml with `disabled` sensors switched off (enabled: false) and `settings`
+// added to the named sensors (e.g. {"vlp16", "lio: {build_map: false}"}), replayed and evaluated
+// against the folder's ground truth.
 LidarRun replay_with(const std::filesystem::path& folder, const std::string& label,
-                     const std::vector<std::string>& disabled = {}) {
+                     const std::vector<std::string>& disabled = {},
+                     const std::vector<std::pair<std::string, std::string>>& settings = {}) {
   std::string config = test::read_file(folder / "config.yaml");
-  for (const auto& name : disabled) {
+  const auto add_to = [&](const std::string& name, const std::string& line) {
     const std::string entry = "  - name: " + name + "\n";
     const auto at = config.find(entry);
     EXPECT_NE(at, std::string::npos) << name;
-    if (at != std::string::npos) config.insert(at + entry.size(), "    enabled: false\n");
-  }
+    if (at != std::string::npos) config.insert(at + entry.size(), "    " + line + "\n");
+  };
+  for (const auto& name : disabled) add_to(name, "enabled: false");
+  for (const auto& [name, line] : settings) add_to(name, line);
   const auto path = folder / (label + ".yaml");
   std::ofstream(path) << config;
   const auto result = test::replay(path, test::temp_dir(label + "-replay"));
@@ -76,30 +80,41 @@ TEST(MultiLidarReplay, DualMid360RoomIsAtLeastAsAccurateAsTheFrontOneAlone) {
 }
 
 // A roof VLP-16 and a bumper Avia on different clocks, the CAN IMU as the body: the pair against
-// each LiDAR alone on the same recording. Measured (12 s, ~80 m): pair 5.3 mm, VLP-16 alone
-// 56 mm, Avia alone 4.7 mm. The pair is far better than the VLP-16 alone but not as good as the
-// Avia alone: the forward Avia's dense points constrain this street best, and the VLP-16's sparse
-// rings add planes of their own quality to the one map under one noise model (the LIO parameters
-// are per estimator, not per LiDAR). Checked: better than the weaker LiDAR, within 1.5x of the
-// better one.
-TEST(MultiLidarReplay, Vlp16PlusAviaStreetBeatsTheVlp16AndIsCloseToTheAvia) {
+// each LiDAR alone on the same recording (12 s, ~80 m; docs/estimator.md "Several LiDARs"). With
+// every LiDAR building the map (the default) the pair is far better than the VLP-16 alone but a
+// little worse than the Avia alone (5.3 against 4.7 mm, and so on five seeds out of five): the
+// VLP-16's rings, 2 deg apart, cut most voxels in single-ring lines, which pass the planarity test
+// as planes whose tilt about the line nothing observes, and its points then match those planes
+// (their residuals were 4x the Avia's in the sectors only the VLP-16 sees). With the VLP-16
+// matched against the map but not building it (`lio: {build_map: false}`) the pair is better than
+// either LiDAR alone.
+TEST(MultiLidarReplay, Vlp16PlusAviaStreetBeatsBothLidarsAlone) {
   const sim::Scenario scenario = sim::make_scenario("street_vehicle_vlp16_avia");
   if (!test::scenario_runnable(scenario)) GTEST_SKIP() << "VLP-16 or Avia not simulated";
   const auto folder = test::simulate(scenario, 12.0, "vlp16-avia");
   const LidarRun both = replay_with(folder, "vlp16-avia-both");
+  const LidarRun matched = replay_with(folder, "vlp16-avia-both-vlp16-matched", {},
+                                       {{"vlp16", "lio: {build_map: false}"}});
   const LidarRun vlp16 = replay_with(folder, "vlp16-avia-vlp16", {"avia"});
   const LidarRun avia = replay_with(folder, "vlp16-avia-avia", {"vlp16"});
   EXPECT_GT(both.frames, vlp16.frames * 18 / 10);
+  EXPECT_GT(matched.frames, vlp16.frames * 18 / 10);
   EXPECT_EQ(both.summary.counters.scans_late, 0u);
+  EXPECT_EQ(matched.summary.counters.scans_late, 0u);
+  // The default: better than the weaker LiDAR, within 1.5x of the better one.
   EXPECT_LE(both.ate_m, std::max(vlp16.ate_m, avia.ate_m));
   EXPECT_LE(both.ate_m, 1.5 * std::min(vlp16.ate_m, avia.ate_m));
+  // The VLP-16 matched only: better than each LiDAR alone (issue 10).
+  EXPECT_LE(matched.ate_m, std::min(vlp16.ate_m, avia.ate_m));
 }
 
 // The corridor with side rooms: the forward Avia sees uniform walls, floor and ceiling, and faces
 // along x only as slivers through the doorways; the Avia looking left sees into the rooms. With
 // it, half as many frames are degenerate (measured, 16 s: 11 % against 23 %). The trajectory is
-// not more accurate in this world (ATE 6.6 mm against 6.2 mm): the slivers keep the forward
-// LiDAR alone from drifting much, so the check on accuracy is that the pair stays comparable.
+// not more accurate on this seed (ATE 6.6 mm against 6.2 mm) and over seeds it goes either way
+// (seeds 1-5: pair 6.6, 4.7, 10.3, 6.4, 7.8 mm; forward alone 6.2, 7.4, 5.9, 7.9, 12.6 mm): the
+// slivers keep the forward LiDAR alone from drifting much, so the check on accuracy is that the
+// pair stays comparable.
 TEST(MultiLidarReplay, SidewaysLidarConstrainsTheCorridor) {
   const sim::Scenario scenario = sim::make_scenario("corridor_side_rooms_dual_avia");
   if (!test::scenario_runnable(scenario)) GTEST_SKIP() << "Avia not simulated";
