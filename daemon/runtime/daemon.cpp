@@ -13,7 +13,6 @@
 #include "daemon/record/record_session.hpp"
 #include "daemon/replay/input_assignment.hpp"
 #include "daemon/replay/sources.hpp"
-#include "daemon/runtime/cpu_latency_request.hpp"
 #include "daemon/runtime/live_camera_source.hpp"
 #include "daemon/runtime/live_imu_source.hpp"
 #include "daemon/runtime/live_lidar_source.hpp"
@@ -168,10 +167,7 @@ DaemonResult run_daemon(const LivodConfig& config, const DaemonOptions& options)
   // Held until the daemon returns: the threads' hand-overs then never wait for a halted CPU.
   CpuLatencyRequest cpu_latency;
   if (config.realtime.cpu_dma_latency_us >= 0) {
-    cpu_latency =
-        options.cpu_latency_device.empty()
-            ? CpuLatencyRequest(config.realtime.cpu_dma_latency_us)
-            : CpuLatencyRequest(config.realtime.cpu_dma_latency_us, options.cpu_latency_device);
+    cpu_latency = CpuLatencyRequest(config.realtime.cpu_dma_latency_us, options.cpu_latency_device);
     if (cpu_latency.active()) {
       spdlog::info("CPU wake-up latency held at <= {} us (realtime.cpu_dma_latency_us)",
                    config.realtime.cpu_dma_latency_us);

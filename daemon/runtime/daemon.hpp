@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "daemon/config/config.hpp"
+#include "daemon/runtime/cpu_latency_request.hpp"
 #include "daemon/runtime/publisher.hpp"
 #include "estimator/pipeline.hpp"
 #include "io/input_loss.hpp"
@@ -62,8 +63,8 @@ struct DaemonOptions {
   // Tests: called on the map writer thread before each map save is written (a test blocks in it
   // to keep a save in progress and see requests coalesce). Empty: none.
   std::function<void()> map_save_hook;
-  // Tests: the file realtime.cpu_dma_latency_us is written to; empty: /dev/cpu_dma_latency.
-  std::filesystem::path cpu_latency_device;
+  // The file realtime.cpu_dma_latency_us is written to (tests: a scratch file).
+  std::filesystem::path cpu_latency_device = CpuLatencyRequest::kDevice;
 };
 
 struct DaemonResult {

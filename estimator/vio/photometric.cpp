@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include "estimator/vio/image_pyramid.hpp"
 
@@ -209,17 +210,21 @@ Eigen::Matrix<double, Eigen::Dynamic, 7> patch_jacobian(const PatchEval& e,
 
 namespace {
 
-// The integer structure-tensor sums of shi_tomasi_score over the window at (x0, y0); the edge as
-// a template parameter lets the compiler unroll and vectorise the rows (same integers).
+// The integer structure-tensor sums of shi_tomasi_score over the p x p window at (x0, y0). kP > 0:
+// the edge at compile time (p = kP), so that the compiler unrolls and vectorises the rows, with
+// 32-bit sums (at most kP^2 * 2 * 255^2: far below 2^31 for kP <= 16); kP = 0: any edge p, 64-bit
+// sums (no overflow for any window the image holds). The same integers either way.
 template <int kP>
-void structure_sums_fixed(const cv::Mat& image, int x0, int y0, std::int64_t& sxx,
-                          std::int64_t& sxy, std::int64_t& syy) {
-  std::int32_t xx = 0, xy = 0, yy = 0;  // at most kP^2 * 2 * 255^2: far below 2^31 for kP <= 16
-  for (int y = y0; y < y0 + kP; ++y) {
+void structure_sums(const cv::Mat& image, int x0, int y0, int p, std::int64_t& sxx,
+                    std::int64_t& sxy, std::int64_t& syy) {
+  using Sum = std::conditional_t<kP == 0, std::int64_t, std::int32_t>;
+  const int edge = kP > 0 ? kP : p;
+  Sum xx = 0, xy = 0, yy = 0;
+  for (int y = y0; y < y0 + edge; ++y) {
     const std::uint8_t* row = image.ptr<std::uint8_t>(y) + x0;
     const std::uint8_t* up = image.ptr<std::uint8_t>(y - 1) + x0;
     const std::uint8_t* down = image.ptr<std::uint8_t>(y + 1) + x0;
-    for (int x = 0; x < kP; ++x) {
+    for (int x = 0; x < edge; ++x) {
       const std::int32_t dx = static_cast<std::int32_t>(row[x + 1]) - row[x - 1];
       const std::int32_t dy = static_cast<std::int32_t>(down[x]) - up[x];
       xx += dx * dx;
@@ -243,22 +248,11 @@ double shi_tomasi_score(const cv::Mat& image, const Eigen::Vector2d& px, int pat
   }
   // Integer sums of the doubled central differences: exact, as the double sums of the halved
   // ones are (quarter-integers far below 2^53), so the score is the same, for less work.
-  std::int64_t sxx = 0, sxy = 0, syy = 0;  // no overflow for any window the image holds
+  std::int64_t sxx = 0, sxy = 0, syy = 0;
   if (patch_size == 8) {
-    structure_sums_fixed<8>(image, x0, y0, sxx, sxy, syy);
+    structure_sums<8>(image, x0, y0, patch_size, sxx, sxy, syy);
   } else {
-    for (int y = y0; y < y0 + patch_size; ++y) {
-      const std::uint8_t* row = image.ptr<std::uint8_t>(y);
-      const std::uint8_t* up = image.ptr<std::uint8_t>(y - 1);
-      const std::uint8_t* down = image.ptr<std::uint8_t>(y + 1);
-      for (int x = x0; x < x0 + patch_size; ++x) {
-        const std::int32_t dx = static_cast<std::int32_t>(row[x + 1]) - row[x - 1];
-        const std::int32_t dy = static_cast<std::int32_t>(down[x]) - up[x];
-        sxx += dx * dx;
-        sxy += dx * dy;
-        syy += dy * dy;
-      }
-    }
+    structure_sums<0>(image, x0, y0, patch_size, sxx, sxy, syy);
   }
   double xx = 0.25 * static_cast<double>(sxx);
   double xy = 0.25 * static_cast<double>(sxy);
