@@ -6,6 +6,16 @@
 #                                              36-40 s each, REPEAT (default 5) replays per rig
 #   bench/replay_bench.sh memory [BUILD_DIR]   15 min of the Mid-360 room: RSS and map bytes over
 #                                              time (needs ~3 GB in $TMPDIR for the capture)
+#   bench/replay_bench.sh defaults [BUILD_DIR]  every simulated model with the configuration
+#                                              `livod sim` writes (no estimator section) at each
+#                                              rate of RATES (default '10 20' Hz), SEEDS (default
+#                                              3) seeds each: per-frame p50 and p99 (wall and CPU)
+#                                              and ATE. BEFORE=/path/to/livod replays the same
+#                                              captures with another build too; MODELS='VLP-16
+#                                              XT32' runs only those rows.
+#   bench/replay_bench.sh sweep BUILD_DIR SCENARIO SECONDS RATE 'SETTINGS'...
+#                                              one row per estimator setting (YAML flow mapping,
+#                                              '' = defaults) over SEEDS seeds: mean ATE, p99
 #
 # BUILD_DIR defaults to build/release (a Release build: -O2, portable, IEEE-exact).
 # Per-frame figures are wall time and CPU time over all threads (unaffected by other processes); run on an
@@ -52,7 +62,105 @@ run() {
   echo "$median_run" > "$work/last"
 }
 
+# Figures of one replay folder: points p50, wall p50, wall p99, CPU p99.
+figures() {
+  awk '/^  total \(wall\)/ {w50 = $4; w99 = $8} /^  total \(CPU/ {c99 = $10}
+       /^  points after downsample/ {p = $5} END {print p, w50, w99, c99}' "$1/timing.txt"
+}
+
+# mean, min and max of a column of numbers
+stats() {
+  awk '{s += $1; if (NR == 1 || $1 < lo) lo = $1; if (NR == 1 || $1 > hi) hi = $1}
+       END {if (NR) printf "%.4f %.4f %.4f", s / NR, lo, hi}'
+}
+
+# $1 livod binary, $2 sim folder, $3 settings ('' = none), $4 output folder: prints
+# "points wall-p50 wall-p99 cpu-p99 ate"
+replay_one() {
+  local bin=$1 sim=$2 settings=$3 out=$4
+  # Beside config.yaml: its capture paths are relative to the file.
+  local yaml
+  yaml="$sim/$(basename "$out").yaml"
+  cp "$sim/config.yaml" "$yaml"
+  if [ -n "$settings" ]; then echo "estimator: $settings" >> "$yaml"; fi
+  "$bin" replay --config "$yaml" -o "$out" -q > /dev/null
+  local ate
+  ate=$("$livod" eval "$out/trajectory.txt" "$sim/groundtruth.txt" | awk '/^ATE/ {print $3}')
+  echo "$(figures "$out") $ate"
+}
+
+# median over the rows of $work/rows of column $1 ($2 rows)
+median_of() {
+  sort -n -k"$1" "$work/rows" | awk -v c="$1" -v n="$2" 'NR == int((n + 1) / 2) {print $c}'
+}
+
 case "$mode" in
+  defaults)
+    seeds=${SEEDS:-3}
+    printf "%-8s %-24s %4s %8s %8s %8s %8s %10s  %s\n" model scenario Hz points p50 p99 \
+      "p99-CPU" "ATE-mean" "(min-max, m)"
+    while read -r model scenario seconds; do
+      # MODELS='VLP-16 XT32' runs only those rows.
+      if [ -n "${MODELS:-}" ] && [[ " $MODELS " != *" $model "* ]]; then continue; fi
+      for rate in ${RATES:-10 20}; do
+        for build in after before; do
+          bin=$livod
+          if [ "$build" = before ]; then
+            [ -n "${BEFORE:-}" ] || continue
+            bin=$BEFORE
+          fi
+          : > "$work/rows"
+          for seed in $(seq "$seeds"); do
+            sim="$work/$(basename "$scenario" .yaml)-$rate-$seed"
+            # A name is a built-in scenario, a path a scenario file (bench/scenarios/).
+            if [ -f "$scenario" ]; then pick=(--scenario-file "$scenario"); else pick=(--scenario "$scenario"); fi
+            [ -d "$sim" ] || "$livod" sim "${pick[@]}" --duration "$seconds" \
+              --seed "$seed" --scan-rate "$rate" --no-images -o "$sim" > /dev/null
+            replay_one "$bin" "$sim" "" "$sim-$build" >> "$work/rows"
+            rm -rf "$sim-$build"
+          done
+          read -r ate lo hi <<< "$(awk '{print $5}' "$work/rows" | stats)"
+          printf "%-8s %-24s %4s %8s %8s %8s %8s %10s  (%s-%s) %s\n" "$model" "$scenario" \
+            "$rate" "$(median_of 1 "$seeds")" "$(median_of 2 "$seeds")" \
+            "$(median_of 3 "$seeds")" "$(median_of 4 "$seeds")" "$ate" "$lo" "$hi" \
+            "$([ "$build" = before ] && echo "[before]")"
+        done
+        rm -rf "$work/$(basename "$scenario" .yaml)-$rate-"*
+      done
+    done <<'EOF'
+AVIA     room_handheld_avia      30
+MID-360  room_handheld_mid360    30
+OS1-64   room_handheld_os1_64    30
+OS1-64   street_drone_os1_64     36
+OS1-128  street_vehicle_os1_128  36
+VLP-16   street_vehicle_vlp16    36
+HDL-32E  street_vehicle_hdl32e   36
+XT32     bench/scenarios/street_vehicle_xt32.yaml 36
+EOF
+    ;;
+  sweep)
+    scenario=$3 seconds=$4 rate=$5
+    shift 5
+    seeds=${SEEDS:-3}
+    for seed in $(seq "$seeds"); do
+      "$livod" sim --scenario "$scenario" --duration "$seconds" --seed "$seed" --scan-rate "$rate" \
+        --no-images -o "$work/sim-$seed" > /dev/null
+    done
+    for settings in "$@"; do
+      : > "$work/rows"
+      for seed in $(seq "$seeds"); do
+        replay_one "$livod" "$work/sim-$seed" "$settings" "$work/out-$seed" >> "$work/rows"
+        rm -rf "$work/out-$seed"
+      done
+      read -r ate lo hi <<< "$(awk '{print $5}' "$work/rows" | stats)"
+      p99=$(awk '{print $3}' "$work/rows" | sort -n | tail -1)
+      cpu=$(awk '{print $4}' "$work/rows" | sort -n | tail -1)
+      pts=$(awk '{print $1}' "$work/rows" | sort -n | tail -1)
+      printf "%s %s Hz  ATE %s (%s-%s) m  p99 max %s ms (CPU %s)  points %s  %s\n" "$scenario" \
+        "$rate" "$ate" "$lo" "$hi" "$p99" "$cpu" "$pts" "${settings:-defaults}"
+    done
+    ;;
+
   timing)
     # The issue's benchmark: OS1-64 on the street, with FAST_LIO's OS1-64 downsampling (every 4th
     # point, 0.5 m cells) and a denser one (every 2nd point, 0.2 m cells).
@@ -80,7 +188,7 @@ case "$mode" in
       awk 'NR == 1 || NR == 2 || NR % 5 == 1'
     ;;
   *)
-    echo "usage: $0 timing|memory [BUILD_DIR]" >&2
+    echo "usage: $0 timing|memory|defaults [BUILD_DIR] | sweep BUILD_DIR SCENARIO SECONDS RATE SETTINGS..." >&2
     exit 2
     ;;
 esac

@@ -64,6 +64,11 @@ struct LioParams {
   int point_filter_num = 1;       // keep every n-th point
   double blind = 0.8;             // minimum range (m)
   double filter_size_surf = 0.1;  // scan voxel-grid downsampling (m); 0 disables
+  // > 0: points per scan after downsampling. The cell grows above filter_size_surf (up to
+  // voxel_size) whenever a scan brings more (lio/point_budget.hpp): a fixed per-frame cost for
+  // any sensor and place. 0: the cell is filter_size_surf. The daemon sets it per sensor model
+  // (daemon/config/estimator_defaults.hpp).
+  int point_budget = 0;
   ConvergenceParams convergence;
 };
 

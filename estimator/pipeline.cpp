@@ -63,6 +63,11 @@ LioPipeline::LioPipeline(PipelineOptions options)
                    [](const LidarLioParams& l) { return l.build_map; })) {
     throw std::invalid_argument("LioPipeline: no LiDAR builds the map");
   }
+  const LioParams& lio = options_.params.lio;
+  if (lio.point_budget > 0 && lio.filter_size_surf > 0.0) {
+    point_budget_.emplace(lio.point_budget, lio.filter_size_surf,
+                          std::max(lio.filter_size_surf, lio.voxel_size));
+  }
   p2p_ = std::make_unique<PointToPlane>(*map_, T_imu_lidars_, options_.runner,
                                         point_noise(options_.params.lio),
                                         options_.params.lio.incidence_term);
@@ -320,7 +325,21 @@ void LioPipeline::prepare_points(const LidarScan& scan, std::size_t lidar, Mappe
 
   // Downsampled in the LiDAR's own frame, so that each point keeps its LiDAR (its ray and noise).
   t0 = std::chrono::steady_clock::now();
-  downsampler_.apply(lidar_points_);
+  if (point_budget_) {
+    // The cell the budget chose. With one LiDAR a scan far over the budget is redone at once with
+    // the corrected cell; with several the budget counts the frame's total (process_group) and the
+    // cell follows from the next frame.
+    downsampler_.set_cell(point_budget_->cell());
+    downsampler_.apply(lidar_points_, downsampled_);
+    if (T_imu_lidars_.size() == 1 && point_budget_->observe(downsampled_.size())) {
+      downsampler_.set_cell(point_budget_->cell());
+      downsampler_.apply(lidar_points_, downsampled_);
+      point_budget_->observe(downsampled_.size());
+    }
+    lidar_points_.swap(downsampled_);
+  } else {
+    downsampler_.apply(lidar_points_);
+  }
   spatial_order_.apply(lidar_points_, lio.voxel_size);
   if (undistorted_.empty()) {
     undistorted_.swap(lidar_points_);
@@ -362,6 +381,8 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   } else {
     prepare_points(group.scan, 0, group.t_update, report.timings);
   }
+  if (point_budget_ && T_imu_lidars_.size() > 1) point_budget_->observe(undistorted_.size());
+  report.downsample_cell_m = downsampler_.cell();
   report.used_points = static_cast<int>(undistorted_.size());
 
   // Residuals: the points' covariances, then association and residual rows at every iteration;

@@ -29,6 +29,7 @@
 #include "estimator/imu/initializer.hpp"
 #include "estimator/imu/undistortion.hpp"
 #include "estimator/lio/downsample.hpp"
+#include "estimator/lio/point_budget.hpp"
 #include "estimator/lio/point_to_plane.hpp"
 #include "estimator/lio/spatial_order.hpp"
 #include "estimator/map/voxel_map.hpp"
@@ -80,7 +81,8 @@ struct FrameReport {
   std::uint32_t scan_sequence = 0;
   int lidar = 0;  // the LiDAR whose scan end is t (several LiDARs; 0 otherwise)
   int raw_points = 0;
-  int used_points = 0;  // after blind/point_filter_num and downsampling
+  int used_points = 0;             // after blind/point_filter_num and downsampling
+  double downsample_cell_m = 0.0;  // the voxel-grid cell used (adapts with lio.point_budget)
   int matched = 0;
   int iterations = 0;
   bool converged = false;
@@ -225,6 +227,8 @@ class LioPipeline {
   bool builds_map_all_ = true;                  // every LiDAR's points go into the map
   std::vector<CovPoint> map_points_;            // the points that do (when not all LiDARs build)
   VoxelGridDownsampler downsampler_;
+  std::optional<PointBudget> point_budget_;
+  std::vector<Eigen::Vector3d> downsampled_;
   SpatialOrder spatial_order_;
   Belief belief_;
   MappedTime state_time_;

@@ -36,6 +36,8 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
     std::string out;
     bool no_images = false;
     bool bag = false;
+    double scan_rate_hz = 0.0;
+    bool plain = false;
   };
   auto opts = std::make_shared<Options>();
   cmd->add_flag("--list", opts->list, "List the named scenarios (name first, one per line)");
@@ -52,6 +54,14 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
   cmd->add_flag("--bag", opts->bag,
                 "Also write sequence.bag: the same sequence as a ROS1 bag (FAST-LIO/FAST-LIVO2 "
                 "topics, synchronised stamps)");
+  cmd->add_option("--scan-rate", opts->scan_rate_hz,
+                  "Scans per second of every LiDAR: 10 or 20 (Ouster 1024x10 / 1024x20, Velodyne "
+                  "600 / 1200 RPM, Livox 100 / 50 ms frames; default: the scenario's)")
+      ->check(CLI::IsMember({10.0, 20.0}));
+  cmd->add_flag(
+      "--plain", opts->plain,
+      "Ideal sensors and an empty world: no beam divergence, detection limit, range walk, "
+      "moving objects or foliage (Gaussian range noise and dropouts only)");
   cmd->callback([opts, &ctx] {
     std::set<std::string> models;
     for (const auto& [m, _] : sim::simulated_lidar_models()) models.insert(m);
@@ -74,9 +84,13 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
       ctx.exit_code = 2;
       return;
     }
-    const sim::Scenario scenario = opts->scenario.empty()
-                                       ? sim::load_scenario_yaml(opts->scenario_file)
-                                       : sim::make_scenario(opts->scenario);
+    sim::Scenario scenario = opts->scenario.empty() ? sim::load_scenario_yaml(opts->scenario_file)
+                                                    : sim::make_scenario(opts->scenario);
+    for (auto& lidar : scenario.lidars) {
+      if (opts->scan_rate_hz > 0.0) lidar.scan_rate_hz = opts->scan_rate_hz;
+      if (opts->plain) lidar.range = sim::plain_range_model(lidar.range);
+    }
+    if (opts->plain) scenario.scene = sim::SceneContent{};
     sim::SimRunOptions run;
     run.out_dir = opts->out;
     run.seed = opts->seed;

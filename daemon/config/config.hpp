@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <span>
 #include <string>
 #include <string_view>
@@ -290,6 +291,14 @@ struct RealtimeConfig {
   int cpu_dma_latency_us = -1;
 };
 
+// One estimator setting as the configuration's sensors made it (estimator_defaults.hpp): what
+// check-config prints for it.
+struct EstimatorChoice {
+  std::string key;     // e.g. "lio.point_filter_num"
+  std::string value;   // as it would be written in the file
+  std::string reason;  // why: the file set it, or the model fact it follows from
+};
+
 struct LivodConfig {
   std::filesystem::path source_file;  // the config file; empty when loaded from a string
   std::filesystem::path base_dir;     // relative paths in the file are resolved against it
@@ -298,7 +307,10 @@ struct LivodConfig {
   int body_sensor_index = -1;  // index into sensors of the body IMU (or of its LiDAR)
   bool body_is_internal_imu = false;
   std::vector<SensorConfig> sensors;
-  estimator::EstimatorParams estimator;
+  estimator::EstimatorParams estimator;  // effective: the file's values, then the model defaults
+  // Estimator keys the file set ("lio.point_filter_num", ...): model defaults never change them.
+  std::set<std::string> estimator_given;
+  std::vector<EstimatorChoice> estimator_choices;  // the model-dependent values and why
   OutputsConfig outputs;
   HealthConfig health;
   RealtimeConfig realtime;

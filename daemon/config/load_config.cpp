@@ -10,6 +10,7 @@
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
+#include "daemon/config/estimator_defaults.hpp"
 #include "daemon/config/readers.hpp"
 #include "daemon/config/yaml_reader.hpp"
 
@@ -100,7 +101,7 @@ void read_document(ProblemList& problems, const YAML::Node& root,
   }
   {
     MapReader m = top.map("estimator");
-    config_detail::read_estimator(m, config.estimator);
+    config_detail::read_estimator(m, config.estimator, config.estimator_given);
   }
   {
     MapReader m = top.map("outputs");
@@ -116,6 +117,8 @@ void read_document(ProblemList& problems, const YAML::Node& root,
   }
   top.finish();
   config_detail::check_sensors(problems, config, sites, sensors_at, body_frame_at);
+  // The sensors are known: the estimator settings that depend on the LiDAR model.
+  apply_estimator_defaults(config);
 }
 
 // Counts the documents of a YAML stream (at most two: one is allowed, two is a problem) and

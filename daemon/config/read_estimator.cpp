@@ -33,11 +33,14 @@ void read_imu(MapReader& m, estimator::ImuParams& imu) {
   m.finish();
 }
 
-void read_lio(MapReader& m, estimator::LioParams& lio) {
+void read_lio(MapReader& m, estimator::LioParams& lio, std::set<std::string>& given) {
   ProblemList& problems = m.problems();
+  const auto note = [&given](bool present, const char* key) {
+    if (present) given.insert(std::string("lio.") + key);
+  };
   m.read("max_iterations", lio.max_iterations, 1, 100);
-  m.read("dept_err", lio.dept_err, left_open(0.0, 1.0));
-  m.read("beam_err_deg", lio.beam_err_deg, left_open(0.0, 5.0));
+  note(m.read("dept_err", lio.dept_err, left_open(0.0, 1.0)), "dept_err");
+  note(m.read("beam_err_deg", lio.beam_err_deg, left_open(0.0, 5.0)), "beam_err_deg");
   m.read("incidence_term", lio.incidence_term);
   m.read("max_incidence_deg", lio.max_incidence_deg, closed(0.0, 89.0));
   m.read("min_eigen_value", lio.min_eigen_value, left_open(0.0, 1.0));
@@ -68,10 +71,12 @@ void read_lio(MapReader& m, estimator::LioParams& lio) {
     }
   }
   m.read("plane_update_points", lio.plane_update_points, 1, 1000);
-  m.read("point_filter_num", lio.point_filter_num, 1, 1000);
+  note(m.read("point_filter_num", lio.point_filter_num, 1, 1000), "point_filter_num");
+  note(m.read("point_budget", lio.point_budget, 0, 1000000), "point_budget");
   m.read("blind", lio.blind, closed(0.0, 100.0));
-  if (m.read("filter_size_surf", lio.filter_size_surf, closed(0.0, 10.0)) &&
-      lio.filter_size_surf >= lio.voxel_size) {
+  const bool filter_size = m.read("filter_size_surf", lio.filter_size_surf, closed(0.0, 10.0));
+  note(filter_size, "filter_size_surf");
+  if (filter_size && lio.filter_size_surf >= lio.voxel_size) {
     problems.warning(ProblemKind::inconsistent, m.child_path("filter_size_surf"),
                      m.key_at("filter_size_surf"),
                      "is not smaller than voxel_size: voxels get too few points to fit planes");
@@ -140,7 +145,8 @@ void read_vio(MapReader& m, estimator::VioParams& vio) {
 
 }  // namespace
 
-void read_estimator(MapReader& reader, estimator::EstimatorParams& params) {
+void read_estimator(MapReader& reader, estimator::EstimatorParams& params,
+                    std::set<std::string>& given) {
   reader.read("threads", params.threads, 0, 256);
   {
     MapReader m = reader.map("imu");
@@ -148,7 +154,7 @@ void read_estimator(MapReader& reader, estimator::EstimatorParams& params) {
   }
   {
     MapReader m = reader.map("lio");
-    read_lio(m, params.lio);
+    read_lio(m, params.lio, given);
   }
   {
     MapReader m = reader.map("map");

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -51,7 +52,9 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
 void read_extrinsic(MapReader& reader, SensorConfig& sensor, SensorSite& site);
 void read_camera(MapReader& reader, Driver driver, CameraConfig& camera, bool& ok);
 void read_can(MapReader& reader, CanConfig& can);
-void read_estimator(MapReader& reader, estimator::EstimatorParams& params);
+// `given` collects the keys the file set that the model defaults would otherwise choose.
+void read_estimator(MapReader& reader, estimator::EstimatorParams& params,
+                    std::set<std::string>& given);
 void read_outputs(MapReader& reader, const ReadContext& context, OutputsConfig& outputs);
 
 // A path from the file, resolved against the config folder.

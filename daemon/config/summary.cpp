@@ -1,9 +1,11 @@
 #include "daemon/config/summary.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
 
+#include "daemon/config/estimator_defaults.hpp"
 #include "daemon/config/rotation.hpp"
 
 namespace livod::daemon {
@@ -104,6 +106,20 @@ std::string summarize_config(const LivodConfig& config) {
           << (s.lio.build_map ? ", builds the map" : ", matched only (does not build the map)");
     }
     out << '\n';
+  }
+  if (!config.estimator_choices.empty()) {
+    const int lidar = estimator_lidar_index(config);
+    const SensorConfig& s = config.sensors[static_cast<std::size_t>(lidar)];
+    out << "estimator on " << s.name << (s.model.empty() ? "" : " (" + s.model + ")")
+        << ", effective values:\n";
+    std::size_t width = 0;
+    for (const auto& c : config.estimator_choices) {
+      width = std::max(width, c.key.size() + 1 + c.value.size());
+    }
+    for (const auto& c : config.estimator_choices) {
+      const std::string kv = c.key + ' ' + c.value;
+      out << "  " << kv << std::string(width - kv.size() + 2, ' ') << c.reason << '\n';
+    }
   }
   const auto& lcm = config.outputs.lcm;
   out << "outputs: lcm ";

@@ -17,6 +17,12 @@ void VoxelGridDownsampler::reserve_slots(std::size_t points) {
   }
 }
 
+void VoxelGridDownsampler::apply(const std::vector<Eigen::Vector3d>& in,
+                                 std::vector<Eigen::Vector3d>& out) {
+  out = in;
+  apply(out);
+}
+
 void VoxelGridDownsampler::apply(std::vector<Eigen::Vector3d>& points) {
   if (cell_ <= 0.0) return;
   reserve_slots(points.size());
@@ -25,8 +31,11 @@ void VoxelGridDownsampler::apply(std::vector<Eigen::Vector3d>& points) {
     generation_ = 1;
   }
   cells_.clear();
+  cell_of_point_.resize(points.size());
   const std::size_t mask = slots_.size() - 1;
-  for (const auto& p : points) {
+  // 1. Cells and their centroids.
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Eigen::Vector3d& p = points[k];
     // 21 bits per axis (+-1M cells, +-104 km at 0.1 m) packed into one key.
     const auto ix = floor_to_int(p.x() * inv_cell_) & 0x1FFFFF;
     const auto iy = floor_to_int(p.y() * inv_cell_) & 0x1FFFFF;
@@ -44,11 +53,22 @@ void VoxelGridDownsampler::apply(std::vector<Eigen::Vector3d>& points) {
     Cell& c = cells_[slot.cell];
     c.sum += p;
     ++c.count;
+    cell_of_point_[k] = slot.cell;
   }
+  for (Cell& c : cells_) c.centroid = c.sum / static_cast<double>(c.count);
+  // 2. The measured point nearest to its cell's centroid (the first of equals).
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    Cell& c = cells_[cell_of_point_[k]];
+    const double d2 = (points[k] - c.centroid).squaredNorm();
+    if (d2 < c.best_d2) {
+      c.best_d2 = d2;
+      c.best = static_cast<std::uint32_t>(k);
+    }
+  }
+  // Cells are in order of first appearance and each keeps a point at or after that index, so the
+  // points can be compacted in place.
+  for (std::size_t i = 0; i < cells_.size(); ++i) points[i] = points[cells_[i].best];
   points.resize(cells_.size());
-  for (std::size_t i = 0; i < cells_.size(); ++i) {
-    points[i] = cells_[i].sum / static_cast<double>(cells_[i].count);
-  }
 }
 
 }  // namespace livod::estimator

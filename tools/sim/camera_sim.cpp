@@ -43,7 +43,9 @@ double CameraSim::ideal_intensity(const World& world, const Eigen::Isometry3d& T
 }
 
 void CameraSim::render(const World& world, const Eigen::Isometry3d& T_world_cam, double exposure_s,
-                       std::mt19937_64& rng, GreyImage& out) const {
+                       std::mt19937_64& rng, GreyImage& out, const MovingObjects* movers,
+                       double time) const {
+  const bool moving = movers != nullptr && !movers->empty();
   const int w = params_.intrinsics.width;
   const int h = params_.intrinsics.height;
   out.width = w;
@@ -62,9 +64,16 @@ void CameraSim::render(const World& world, const Eigen::Isometry3d& T_world_cam,
     double v = 0.0;
     if (ray_cam.squaredNorm() != 0.0) {
       const Eigen::Vector3d dir = R_world_cam * ray_cam;
-      v = world.intersect(origin, dir, 1e-3, params_.max_range_m, hit)
-              ? gain * World::albedo(*hit.surface, hit.point, cache)
-              : gain * params_.sky_albedo;
+      bool seen = world.intersect(origin, dir, 1e-3, params_.max_range_m, hit);
+      if (moving) {
+        Hit moving_hit;
+        if (movers->intersect(time, origin, dir, 1e-3, seen ? hit.range : params_.max_range_m,
+                              moving_hit)) {
+          hit = moving_hit;
+          seen = true;
+        }
+      }
+      v = seen ? gain * World::albedo(*hit.surface, hit.point, cache) : gain * params_.sky_albedo;
     }
     if (params_.noise_sigma > 0.0) v += noise(rng);
     out.pixels[i] = static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/camera_model.hpp"
+#include "tools/sim/moving_objects.hpp"
 #include "tools/sim/world.hpp"
 
 namespace livod::sim {
@@ -67,9 +68,11 @@ class CameraSim {
   // Exposure time of the frame with mid-exposure at scenario time t.
   [[nodiscard]] double exposure_at(double t) const;
 
-  // Renders the world seen from T_world_cam (camera frame: z forward, x right, y down).
+  // Renders the world seen from T_world_cam (camera frame: z forward, x right, y down), with the
+  // moving objects where they are at scenario time `time` (global shutter) when given.
   void render(const World& world, const Eigen::Isometry3d& T_world_cam, double exposure_s,
-              std::mt19937_64& rng, GreyImage& out) const;
+              std::mt19937_64& rng, GreyImage& out, const MovingObjects* movers = nullptr,
+              double time = 0.0) const;
 
   // The noise-free intensity (before quantisation) of the surface a pixel sees, for tests.
   [[nodiscard]] double ideal_intensity(const World& world, const Eigen::Isometry3d& T_world_cam,

@@ -11,13 +11,13 @@
 #include "drivers/hesai/geometry.hpp"
 #include "drivers/hesai/hesai_decoder.hpp"
 #include "drivers/hesai/packet.hpp"
+#include "tools/sim/lidar_return.hpp"
 
 namespace livod::sim {
 namespace {
 
 namespace hs = drivers::hesai;
 
-constexpr double kRotationHz = 10.0;  // 600 RPM, the factory setting
 constexpr int kBlocks = 8;
 constexpr int kChannels = 32;
 
@@ -42,6 +42,9 @@ class SimPandarXt32 final : public SimLidar {
         clock_(options.clock, options.seed ^ 0x4444),
         link_(options.link, options.seed ^ 0x5555),
         rng_(options.seed),
+        // 600 RPM (the factory setting) or 1200 RPM for scan_rate_hz 20: the firing round stays
+        // 50 us, so the azimuth step doubles.
+        rotation_hz_(options.scan_rate_hz >= 15.0 ? 20.0 : 10.0),
         corrections_(unit_corrections()),
         geometry_(corrections_),
         timing_(hs::Model::kPandarXT32),
@@ -77,19 +80,17 @@ class SimPandarXt32 final : public SimLidar {
     p.return_mode = 0x37;
     p.first_block_return = 0;
     p.distance_unit_m = 0.004;
-    p.motor_rpm = static_cast<std::uint16_t>(std::lround(kRotationHz * 60.0));
+    p.motor_rpm = static_cast<std::uint16_t>(std::lround(rotation_hz_ * 60.0));
     p.udp_sequence = static_cast<std::uint32_t>(k + 1);
     // The packet time dates the last round (block 7): its round starts block_start_ns after it.
     const double t_last_round = t_first_round + (kBlocks - 1) * round_s_;
     const double t_packet = t_last_round - timing_.block_start_ns(false, kBlocks - 1) * 1e-9;
     const std::int64_t stamp = clock_.stamp_ns(t_packet);
     p.timestamp_ns = stamp - ((stamp % 1000) + 1000) % 1000;  // the tail keeps microseconds
-    std::normal_distribution<double> noise(0.0, options_.range.sigma_m);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (int b = 0; b < kBlocks; ++b) {
       // The block azimuth is the head's angle at the round's first firing.
       const double t_round = t_first_round + b * round_s_;
-      const double turns = t_round * kRotationHz;
+      const double turns = t_round * rotation_hz_;
       const auto azimuth = static_cast<std::uint16_t>(
           static_cast<std::int64_t>(std::llround((turns - std::floor(turns)) * 36000.0)) % 36000);
       p.azimuth[static_cast<std::size_t>(b)] = azimuth;
@@ -100,22 +101,22 @@ class SimPandarXt32 final : public SimLidar {
         const double t =
             t_packet + (timing_.offset_ns(false, b, c)) * 1e-9;  // the channel's firing
         const Eigen::Isometry3d T_world_sensor = scene.T_world_sensor(t);
-        Hit hit;
         std::uint16_t raw = 0;
         std::uint8_t refl = 0;
         SimPointTruth truth;
         truth.t = t;
         truth.ring = static_cast<std::uint16_t>(kChannels - 1 - c);  // channel 1 is the top beam
-        if (scene.world->intersect(T_world_sensor.translation(), T_world_sensor.linear() * dir,
-                                   1e-3, options_.range.max_range_m, hit) &&
-            hit.range >= options_.range.min_range_m &&
-            unit(rng_) >= options_.range.dropout_probability) {
-          const double measured = hit.range + noise(rng_);
-          const long counts = std::lround(measured / p.distance_unit_m);
+        // Everything a real return goes through (lidar_return.hpp): footprint, moving objects,
+        // foliage, signal-limited detection, range noise and walk, dropouts.
+        const LidarReturn ret =
+            measure_return(scene, t, T_world_sensor.translation(), T_world_sensor.linear() * dir,
+                           T_world_sensor.linear().col(2), options_.range, rng_);
+        if (ret.valid) {
+          const long counts = std::lround(ret.range_m / p.distance_unit_m);
           if (counts > 0 && counts < 65536) {
             raw = static_cast<std::uint16_t>(counts);
-            refl = static_cast<std::uint8_t>(std::clamp(
-                hit.surface->reflectivity * options_.range.reflectivity_gain, 0.0, 255.0));
+            refl = static_cast<std::uint8_t>(
+                std::clamp(ret.reflectivity * options_.range.reflectivity_gain, 0.0, 255.0));
             truth.valid = true;
             truth.p_sensor = dir * (raw * p.distance_unit_m);
             truth.reflectivity = refl;
@@ -147,6 +148,7 @@ class SimPandarXt32 final : public SimLidar {
   SensorClock clock_;
   Link link_;
   std::mt19937_64 rng_;
+  double rotation_hz_;
   hs::AngleCorrections corrections_;
   hs::BeamGeometry geometry_;
   hs::FiringTiming timing_;

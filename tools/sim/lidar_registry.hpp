@@ -22,6 +22,9 @@ struct SimLidarOptions {
   std::uint32_t sensor_ip = 0xC0A8010A;  // 192.168.1.10 (host order)
   std::uint32_t host_ip = 0xC0A80132;    // 192.168.1.50
   double host_epoch_s = 0.0;             // host clock reading at scenario time 0
+  // Scans per second: 10 or 20 (Ouster lidar mode 1024x10 / 1024x20, Velodyne 600 / 1200 RPM;
+  // Livox sensors stream continuously, their scan length is the decoder's frame_cut period).
+  double scan_rate_hz = 10.0;
 };
 
 // Models the simulator can write; each entry is (model name, one-line description).

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "drivers/livox/packets.hpp"
+#include "tools/sim/lidar_return.hpp"
 
 namespace livod::sim {
 namespace {
@@ -89,31 +90,27 @@ class SimLivox final : public SimLidar {
 
   void emit_packet(double t0, double interval_s, const SceneContext& scene, SimOutputs& out) {
     std::array<livox::LivoxPoint, kPointsPerPacket> pts{};
-    std::normal_distribution<double> noise(0.0, options_.range.sigma_m);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (std::size_t i = 0; i < kPointsPerPacket; ++i) {
       const double t = t0 + static_cast<double>(i) * interval_s;
       const int line = static_cast<int>(i % static_cast<std::size_t>(pattern_.lines));
       const Eigen::Vector3d dir = direction(t, line);
       const Eigen::Isometry3d T_world_sensor = scene.T_world_sensor(t);
-      Hit hit;
       SimPointTruth truth;
       truth.t = t;
       truth.ring = static_cast<std::uint16_t>(line);
       auto& p = pts[i];
-      if (scene.world->intersect(T_world_sensor.translation(), T_world_sensor.linear() * dir, 1e-3,
-                                 options_.range.max_range_m, hit) &&
-          hit.range >= options_.range.min_range_m &&
-          unit(rng_) >= options_.range.dropout_probability) {
-        const double r = hit.range + noise(rng_);
-        const Eigen::Vector3d q = dir * r;
+      const LidarReturn ret =
+          measure_return(scene, t, T_world_sensor.translation(), T_world_sensor.linear() * dir,
+                         T_world_sensor.linear().col(2), options_.range, rng_);
+      if (ret.valid) {
+        const Eigen::Vector3d q = dir * ret.range_m;
         // Quantise exactly as the wire does so that the truth equals the decoded point.
         p.x = static_cast<float>(std::lround(q.x() * 1000.0) / 1000.0);
         p.y = static_cast<float>(std::lround(q.y() * 1000.0) / 1000.0);
         p.z = static_cast<float>(std::lround(q.z() * 1000.0) / 1000.0);
         p.valid = !(p.x == 0.0F && p.y == 0.0F && p.z == 0.0F);
         p.reflectivity = static_cast<std::uint8_t>(
-            std::clamp(hit.surface->reflectivity * options_.range.reflectivity_gain, 0.0, 255.0));
+            std::clamp(ret.reflectivity * options_.range.reflectivity_gain, 0.0, 255.0));
         truth.p_sensor = Eigen::Vector3d(p.x, p.y, p.z);
         truth.reflectivity = p.reflectivity;
         truth.valid = p.valid;

@@ -17,6 +17,7 @@
 
 #include "core/error.hpp"
 #include "drivers/ouster/crc64.hpp"
+#include "tools/sim/lidar_return.hpp"
 
 namespace livod::sim {
 namespace {
@@ -26,7 +27,6 @@ static_assert(std::endian::native == std::endian::little,
 
 // Lidar mode 1024x10 with profile RNG19_RFL8_SIG16_NIR16 (sensor-protocols.md §3.3).
 constexpr std::uint32_t kColumnsPerFrame = 1024;
-constexpr std::uint32_t kFramesPerSecond = 10;
 constexpr std::uint32_t kColumnsPerPacket = 16;
 constexpr std::size_t kPacketHeaderBytes = 32;
 constexpr std::size_t kPacketFooterBytes = 32;
@@ -180,11 +180,12 @@ class JsonObject {
 // Firmware 2.5 nested layout (the shape of GET /api/v1/sensor/metadata; template: ouster-sdk
 // tests/metadata/2_5_0_os-992146000760-128.json).
 std::string metadata_json(const Product& product, const BeamCalibration& beams,
-                          std::uint32_t init_id, std::uint32_t host_ip) {
+                          std::uint32_t init_id, std::uint32_t host_ip,
+                          std::uint32_t frames_per_second) {
   const std::string profile_lidar = "RNG19_RFL8_SIG16_NIR16";
   const std::string profile_imu = "LEGACY";
   const std::string lidar_mode =
-      std::to_string(kColumnsPerFrame) + "x" + std::to_string(kFramesPerSecond);
+      std::to_string(kColumnsPerFrame) + "x" + std::to_string(frames_per_second);
   const std::array<double, 16> beam_to_lidar{1, 0, 0, kBeamOriginMm, 0, 1, 0, 0, 0, 0, 1, 0, 0,
                                              0, 0, 1};
   const std::array<double, 16> lidar_to_sensor{
@@ -283,7 +284,9 @@ class SimOuster final : public SimLidar {
         init_id_(
             static_cast<std::uint32_t>(((options.seed * 0x9E3779B97F4A7C15ULL) >> 40) % 0xFFFFFFU) +
             1U),
-        prod_sn_(std::stoull(product.prod_sn)) {
+        prod_sn_(std::stoull(product.prod_sn)),
+        // Lidar modes 1024x10 and 1024x20 (scan_rate_hz picks one).
+        frames_per_second_(options.scan_rate_hz >= 15.0 ? 20U : 10U) {
     build_geometry();
     packet_bytes_ = kPacketHeaderBytes +
                     kColumnsPerPacket * (kColumnHeaderBytes + product_.rows * kChannelBlockBytes) +
@@ -298,7 +301,7 @@ class SimOuster final : public SimLidar {
   void run(double t_begin, double t_end, const SceneContext& scene, SimOutputs& out) override {
     // Sensor-clock periods in scenario time: the oscillator runs skew_ppm fast.
     const double rate = 1.0 + options_.clock.skew_ppm * 1e-6;
-    const double column_s = 1.0 / (kColumnsPerFrame * kFramesPerSecond) / rate;
+    const double column_s = 1.0 / (kColumnsPerFrame * frames_per_second_) / rate;
     // A packet belongs to the run() call whose interval holds its send time, the instant of its
     // last column: a D-second capture holds what the sensor sent in D seconds. With D a multiple
     // of 0.1 s that is whole frames as long as the clock runs fast by less than a packet
@@ -328,7 +331,7 @@ class SimOuster final : public SimLidar {
                                                       const std::string& stem) const override {
     const std::filesystem::path path = dir / (stem + ".json");
     std::ofstream os(path, std::ios::binary);
-    os << metadata_json(product_, beams_, init_id_, options_.host_ip);
+    os << metadata_json(product_, beams_, init_id_, options_.host_ip, frames_per_second_);
     os.flush();
     if (!os) throw Error("cannot write Ouster metadata " + path.string());
     return {path};
@@ -407,26 +410,22 @@ class SimOuster final : public SimLidar {
     const Eigen::Isometry3d T_world_sensor = scene.T_world_sensor(t);
     const Eigen::Matrix3d R_world_beam = T_world_sensor.linear() * column.R_sensor_beam;
     const Eigen::Vector3d origin_world = T_world_sensor * column.origin_m;
+    const Eigen::Vector3d up_world = T_world_sensor.linear().col(2);
     SimPointTruth truth;
     truth.t = t;
-    Hit hit;
     for (std::uint32_t u = 0; u < product_.rows; ++u) {
       std::byte* block = blocks + u * kChannelBlockBytes;
       const Eigen::Vector3d dir_world = R_world_beam * beam_dirs_[u];
       std::uint32_t range_mm = 0;
-      double surface_reflectivity = 0.0;
-      double incidence_cos = 0.0;
-      double distance_m = 0.0;
-      if (scene.world->intersect(origin_world, dir_world, 1e-3, range.max_range_m, hit)) {
-        surface_reflectivity = hit.surface->reflectivity;
-        incidence_cos = std::abs(hit.normal.dot(dir_world));
-        distance_m = hit.range + range.sigma_m * normal_(rng_);
-        if (unit_(rng_) >= range.dropout_probability && distance_m >= range.min_range_m &&
-            distance_m <= range.max_range_m) {
-          // The wire range counts from the lidar axis: the beam origin is n = 15.806 mm out.
-          const auto mm = std::llround((distance_m + beam_offset_m_) * 1000.0);
-          if (mm > 0 && mm <= kMaxWireRangeMm) range_mm = static_cast<std::uint32_t>(mm);
-        }
+      const LidarReturn ret =
+          measure_return(scene, t, origin_world, dir_world, up_world, range, rng_);
+      const double surface_reflectivity = ret.reflectivity;
+      const double incidence_cos = ret.incidence_cos;
+      const double distance_m = ret.range_m;
+      if (ret.valid) {
+        // The wire range counts from the lidar axis: the beam origin is n = 15.806 mm out.
+        const auto mm = std::llround((distance_m + beam_offset_m_) * 1000.0);
+        if (mm > 0 && mm <= kMaxWireRangeMm) range_mm = static_cast<std::uint32_t>(mm);
       }
       write_channel(block, range_mm, surface_reflectivity, incidence_cos, distance_m);
       truth.ring = static_cast<std::uint16_t>(u);
@@ -507,10 +506,9 @@ class SimOuster final : public SimLidar {
   Link imu_link_;
   ImuModel imu_;
   std::mt19937_64 rng_;
-  std::normal_distribution<double> normal_{0.0, 1.0};
-  std::uniform_real_distribution<double> unit_{0.0, 1.0};
   std::uint32_t init_id_;
   std::uint64_t prod_sn_;
+  std::uint32_t frames_per_second_;
   std::size_t packet_bytes_ = 0;
   std::vector<Eigen::Vector3d> beam_dirs_;  // b_u per row (lidar frame, unit)
   std::vector<Column> columns_;

@@ -35,15 +35,17 @@ constexpr double kStreetAheadM = 60.0;
 constexpr double kTrajectoryProbeS = 0.1;
 
 World make_world(const Scenario& s, std::uint64_t seed) {
+  WorldOptions options;
+  options.foliage = s.scene.foliage;
   switch (s.world) {
     case WorldKind::kRoom:
-      return make_room_world(seed);
+      return make_room_world(seed, options);
     case WorldKind::kCorridor:
       return make_corridor_world();
     case WorldKind::kCorridorSideRooms:
       return make_corridor_side_rooms_world();
     case WorldKind::kStreet:
-      return make_street_world(seed, s.street_length_m);
+      return make_street_world(seed, s.street_length_m, options);
   }
   throw Error("unknown world kind");
 }
@@ -177,6 +179,8 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
   if (sized.world == WorldKind::kStreet)
     sized.street_length_m = street_length_for(scenario, duration);
   const World world = make_world(sized, options.seed);
+  const MovingObjects movers =
+      make_moving_objects(sized.world, sized.scene, options.seed, sized.street_length_m);
   const Trajectory trajectory(scenario.trajectory);
   const double epoch = options.host_epoch_s;
   const std::int64_t epoch_host_ns = epoch_ns(epoch);
@@ -193,12 +197,14 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
     lo.link = mount.link;
     lo.imu = mount.imu;
     lo.imu_noise = mount.imu_noise;
+    lo.scan_rate_hz = mount.scan_rate_hz;
     lo.seed = sub_seed(options.seed, mount.name);
     lo.host_epoch_s = epoch;
     auto lidar = make_sim_lidar(mount.model, lo);
     SceneContext scene;
     scene.world = &world;
     scene.trajectory = &trajectory;
+    scene.movers = &movers;
     scene.T_body_sensor = mount.T_body_sensor;
     const auto pcap_path = options.out_dir / (mount.name + ".pcap");
     OrderedPcapSink sink(pcap_path);
@@ -371,7 +377,7 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
       const std::int64_t stamp = epoch_host_ns + to_ns(t + cam.time_offset_s);
       const std::string file = std::to_string(stamp) + ".png";
       if (options.write_images) {
-        sim.render(world, T_world_cam, exposure, rng, img);
+        sim.render(world, T_world_cam, exposure, rng, img, &movers, t);
         const cv::Mat mat(img.height, img.width, CV_8UC1, img.pixels.data());
         if (!cv::imwrite((dir / "data" / file).string(), mat)) {
           throw Error("cannot write image " + (dir / "data" / file).string());
@@ -421,6 +427,11 @@ SimRunReport run_scenario(const Scenario& scenario, const SimRunOptions& options
         cfg << "    metadata: " << mount.name << ".json\n";
       } else if (family.file == drivers::DecoderFile::kCalibrationRequired) {
         cfg << "    calibration: " << mount.name << ".csv\n";
+      }
+      // Livox sensors stream without scans: the decoder cuts them every period.
+      if ((family.driver == "livox_sdk1" || family.driver == "livox_sdk2") &&
+          mount.scan_rate_hz != 10.0) {
+        cfg << "    frame_cut: {mode: time, period_s: " << 1.0 / mount.scan_rate_hz << "}\n";
       }
       // Only the models with an internal IMU take the key (of the Velodynes, the HDL-32E).
       if (simulated_lidar_has_imu(mount.model)) {

@@ -29,6 +29,7 @@ struct LidarMount {
   RangeModel range;
   bool imu = true;  // emit the LiDAR-internal IMU (when the model has one)
   ImuNoiseParams imu_noise;
+  double scan_rate_hz = 10.0;  // 10 or 20 (SimLidarOptions::scan_rate_hz)
 };
 
 struct CameraMount {
@@ -77,6 +78,9 @@ struct Scenario {
   std::string description;
   WorldKind world = WorldKind::kRoom;
   double street_length_m = 420.0;
+  // What moves and what scatters in the world: pedestrians and cars (moving_objects.hpp), foliage
+  // (worlds.hpp). The named street and room scenarios have some; see docs/simulator.md.
+  SceneContent scene;
   TrajectorySpec trajectory;
   double duration_s = 30.0;
   std::vector<LidarMount> lidars;
@@ -88,6 +92,15 @@ struct Scenario {
   std::string body_imu;
   double groundtruth_rate_hz = 200.0;
 };
+
+// The range model of a LiDAR model as its datasheet describes it (noise, detection limit, beam
+// divergence, range walk; sources in scenario.cpp and docs/simulator.md). The named scenarios
+// mount their LiDARs with it; unknown models get RangeModel's plain defaults.
+RangeModel datasheet_range_model(const std::string& model);
+
+// `range` without the realism effects (divergence, detection limit, range walk, noise growth):
+// Gaussian noise of sigma_m, dropouts and the range limits only.
+RangeModel plain_range_model(const RangeModel& range);
 
 // Names of the built-in scenarios with a one-line description each.
 std::vector<std::pair<std::string, std::string>> list_scenarios();

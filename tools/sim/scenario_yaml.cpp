@@ -16,7 +16,11 @@
 //     - {model: AVIA, name: avia, translation: [0.04, 0.02, -0.03], rpy_deg: [0, 0, 0],
 //        clock: {offset_s: 5, skew_ppm: 20, jitter_s: 0, reset_at_s: -1},
 //        link: {delay_floor_s: 8e-5, delay_mean_s: 4e-5, loss_probability: 0.0},
-//        range: {sigma_m: 0.02, min_m: 0.2, max_m: 200, dropout: 0.002}, imu: true}
+//        range: {sigma_m: 0.02, min_m: 0.2, max_m: 200, dropout: 0.002, detection_limited: true,
+//                sigma_at_limit_m: 0.08, intensity_bias_m: 0.0, divergence_deg: [0.03, 0.28],
+//                pulse_length_m: 0.75},
+//        scan_rate_hz: 10, imu: true}
+//   scene: {pedestrians: 2, cars: 1, foliage: true}   # per 100 m of street / per room
 //   body_imu: avia
 //   cameras: []                   # clears the base's cameras (only clearing is supported)
 //   can_imu:                      # adds or changes the CAN IMU
@@ -142,7 +146,8 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
   Scenario s;
   check_keys(root,
              {"base", "name", "description", "world", "street_length_m", "duration_s", "trajectory",
-              "lidars", "cameras", "body_imu", "groundtruth_rate_hz", "can_imu", "serial_imu"},
+              "lidars", "cameras", "body_imu", "groundtruth_rate_hz", "scene", "can_imu",
+              "serial_imu"},
              "scenario", p);
   if (!root.IsMap()) throw Error(file.string() + ": a scenario file is a YAML mapping");
   if (const auto base = root["base"]) {
@@ -171,6 +176,18 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
     else
       p.add(w, "scenario.world", "expected room, corridor, corridor_side_rooms or street");
   }
+  if (const auto sc = root["scene"]) {
+    check_keys(sc, {"pedestrians", "cars", "foliage"}, "scenario.scene", p);
+    read(sc, "pedestrians", s.scene.pedestrians, "scenario.scene", p);
+    read(sc, "cars", s.scene.cars, "scenario.scene", p);
+    read(sc, "foliage", s.scene.foliage, "scenario.scene", p);
+    if (s.scene.pedestrians < 0.0 || s.scene.pedestrians > 100.0) {
+      p.add(sc["pedestrians"], "scenario.scene.pedestrians", "must be within [0, 100]");
+    }
+    if (s.scene.cars < 0.0 || s.scene.cars > 100.0) {
+      p.add(sc["cars"], "scenario.scene.cars", "must be within [0, 100]");
+    }
+  }
   if (const auto t = root["trajectory"]) {
     check_keys(t,
                {"x", "y", "z", "roll", "pitch", "yaw", "yaw_follows_heading", "static_duration_s",
@@ -193,11 +210,19 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
     for (std::size_t i = 0; lidars.IsSequence() && i < lidars.size(); ++i) {
       const std::string path = "scenario.lidars[" + std::to_string(i) + "]";
       const auto n = lidars[i];
-      check_keys(n, {"model", "name", "translation", "rpy_deg", "clock", "link", "range", "imu"},
+      check_keys(n,
+                 {"model", "name", "translation", "rpy_deg", "clock", "link", "range", "imu",
+                  "scan_rate_hz"},
                  path, p);
       if (!n.IsMap()) continue;
       LidarMount m;
       read(n, "model", m.model, path, p);
+      // A LiDAR starts from its model's datasheet range model; `range:` overrides parts of it.
+      m.range = datasheet_range_model(m.model);
+      read(n, "scan_rate_hz", m.scan_rate_hz, path, p);
+      if (m.scan_rate_hz != 10.0 && m.scan_rate_hz != 20.0) {
+        p.add(n["scan_rate_hz"], path + ".scan_rate_hz", "must be 10 or 20");
+      }
       read(n, "name", m.name, path, p);
       read(n, "imu", m.imu, path, p);
       if (m.model.empty()) p.add(n, path + ".model", "required");
@@ -233,11 +258,42 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
         }
       }
       if (const auto r = n["range"]) {
-        check_keys(r, {"sigma_m", "min_m", "max_m", "dropout"}, path + ".range", p);
+        check_keys(r,
+                   {"sigma_m", "min_m", "max_m", "dropout", "detection_limited", "sigma_at_limit_m",
+                    "intensity_bias_m", "divergence_deg", "pulse_length_m"},
+                   path + ".range", p);
         read(r, "sigma_m", m.range.sigma_m, path + ".range", p);
         read(r, "min_m", m.range.min_range_m, path + ".range", p);
         read(r, "max_m", m.range.max_range_m, path + ".range", p);
         read(r, "dropout", m.range.dropout_probability, path + ".range", p);
+        read(r, "detection_limited", m.range.detection_limited, path + ".range", p);
+        read(r, "sigma_at_limit_m", m.range.sigma_at_limit_m, path + ".range", p);
+        read(r, "intensity_bias_m", m.range.intensity_bias_m, path + ".range", p);
+        read(r, "pulse_length_m", m.range.pulse_length_m, path + ".range", p);
+        if (const auto dv = r["divergence_deg"]) {
+          if (!dv.IsSequence() || dv.size() != 2) {
+            p.add(dv, path + ".range.divergence_deg",
+                  "expected [across the scan, along the column]");
+          } else {
+            try {
+              m.range.divergence_h_rad = dv[0].as<double>() * M_PI / 180.0;
+              m.range.divergence_v_rad = dv[1].as<double>() * M_PI / 180.0;
+            } catch (const YAML::Exception&) {
+              p.add(dv, path + ".range.divergence_deg", "wrong type");
+            }
+          }
+        }
+        const RangeModel& rm = m.range;
+        if (rm.sigma_m < 0.0 || rm.sigma_at_limit_m < 0.0 || rm.pulse_length_m < 0.0 ||
+            rm.divergence_h_rad < 0.0 || rm.divergence_v_rad < 0.0) {
+          p.add(r, path + ".range", "noise, divergence and pulse length must not be negative");
+        }
+        if (rm.dropout_probability < 0.0 || rm.dropout_probability > 1.0) {
+          p.add(r["dropout"], path + ".range.dropout", "must be within [0, 1]");
+        }
+        if (!(rm.max_range_m > rm.min_range_m)) {
+          p.add(r, path + ".range", "max_m must exceed min_m");
+        }
       }
       s.lidars.push_back(m);
     }

@@ -10,6 +10,7 @@
 #include "drivers/velodyne/data_packet.hpp"
 #include "drivers/velodyne/model.hpp"
 #include "drivers/velodyne/wire.hpp"
+#include "tools/sim/lidar_return.hpp"
 #include "tools/sim/velodyne_position_encoder.hpp"
 
 namespace livod::sim {
@@ -45,7 +46,10 @@ class SimVelodyne final : public SimLidar {
         imu_(imu_params(options.imu_noise, spec_.position_period_s), options.seed ^ 0x3333),
         decoder_(spec_.model, vel::default_calibration(spec_.model), vel::DecodeSettings{}),
         distance_unit_m_(vel::traits(spec_.model).distance_unit_m),
-        packet_s_(static_cast<double>(decoder_.timing().packet_period_ns(false)) * 1e-9) {}
+        packet_s_(static_cast<double>(decoder_.timing().packet_period_ns(false)) * 1e-9) {
+    // 600 RPM (the factory setting) or 1200 RPM for scan_rate_hz 20.
+    spec_.rotation_hz = options.scan_rate_hz >= 15.0 ? 20.0 : 10.0;
+  }
 
   [[nodiscard]] std::string model() const override { return spec_.name; }
 
@@ -106,8 +110,6 @@ class SimVelodyne final : public SimLidar {
     // The decoder's view of this packet at 1 m: per-return direction and firing time.
     const auto geometry =
         decoder_.decode(payload, std::numeric_limits<double>::quiet_NaN(), returns_);
-    std::normal_distribution<double> noise(0.0, options_.range.sigma_m);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (std::size_t i = 0; i < geometry.count; ++i) {
       const vel::DecodedReturn& r = returns_[i];
       const std::size_t b = i / vel::wire::kChannelsPerBlock;
@@ -116,22 +118,20 @@ class SimVelodyne final : public SimLidar {
       const Eigen::Vector3d dir = Eigen::Vector3d(r.x, r.y, r.z).normalized();
       const double t = t0 + r.t_offset_ns * 1e-9;
       const Eigen::Isometry3d T_world_sensor = scene.T_world_sensor(t);
-      Hit hit;
       std::uint16_t raw = 0;
       std::uint8_t refl = 0;
       SimPointTruth truth;
       truth.t = t;
       truth.ring = r.ring;
-      if (scene.world->intersect(T_world_sensor.translation(), T_world_sensor.linear() * dir, 1e-3,
-                                 options_.range.max_range_m, hit) &&
-          hit.range >= options_.range.min_range_m &&
-          unit(rng_) >= options_.range.dropout_probability) {
-        const double measured = hit.range + noise(rng_);
-        const long counts = std::lround(measured / distance_unit_m_);
+      const LidarReturn ret =
+          measure_return(scene, t, T_world_sensor.translation(), T_world_sensor.linear() * dir,
+                         T_world_sensor.linear().col(2), options_.range, rng_);
+      if (ret.valid) {
+        const long counts = std::lround(ret.range_m / distance_unit_m_);
         if (counts > 0 && counts < 65536) {
           raw = static_cast<std::uint16_t>(counts);
           refl = static_cast<std::uint8_t>(
-              std::clamp(hit.surface->reflectivity * options_.range.reflectivity_gain, 0.0, 255.0));
+              std::clamp(ret.reflectivity * options_.range.reflectivity_gain, 0.0, 255.0));
           truth.valid = true;
           truth.p_sensor = dir * (raw * distance_unit_m_);
           truth.reflectivity = refl;

@@ -16,6 +16,10 @@ struct Surface {
   float texture_scale = 1.0F;  // spatial frequency multiplier of the albedo texture (1/m)
   float texture_contrast = 0.35F;
   std::uint32_t texture_seed = 1;
+  // > 0: foliage. The solid is a volume of leaves a LiDAR beam enters and ends in after an
+  // exponentially distributed depth of this mean (lidar_return.cpp), or leaves again; cameras see
+  // its surface.
+  float foliage_free_path_m = 0.0F;
 };
 
 struct Hit {

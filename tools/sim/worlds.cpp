@@ -17,7 +17,7 @@ Surface surface(float reflectivity, float texture_scale, std::uint32_t seed,
 
 }  // namespace
 
-World make_room_world(std::uint64_t seed) {
+World make_room_world(std::uint64_t seed, const WorldOptions& options) {
   World w;
   constexpr double kHalfX = 6.0;
   constexpr double kHalfY = 4.5;
@@ -73,6 +73,18 @@ World make_room_world(std::uint64_t seed) {
       const Eigen::Vector3d centre = along_x ? Eigen::Vector3d(s_pos, sign * (kHalfY - depth), z)
                                              : Eigen::Vector3d(sign * (kHalfX - depth), s_pos, z);
       w.add_box(centre, half, 0.0, surface(static_cast<float>(0.3 + 0.6 * unit(rng)), 5.0F, id++));
+    }
+  }
+  if (options.foliage) {
+    // Potted plants in the four corners: a pot and a leafy crown of 0.4-0.55 m radius.
+    Surface leaves = surface(0.45F, 6.0F, 90);
+    leaves.foliage_free_path_m = 0.5F * kFoliageFreePathM;  // denser than a street tree
+    for (const double sx : {-1.0, 1.0}) {
+      for (const double sy : {-1.0, 1.0}) {
+        const Eigen::Vector3d base(sx * (kHalfX - 0.6), sy * (kHalfY - 0.6), 0.0);
+        w.add_cylinder(base, 0.2, 0.4, surface(0.3F, 4.0F, 91));
+        w.add_sphere(base + Eigen::Vector3d(0, 0, 1.0), 0.4 + 0.15 * (sx > 0 ? 1.0 : 0.0), leaves);
+      }
     }
   }
   w.build();
@@ -152,7 +164,7 @@ World make_corridor_side_rooms_world() {
   return w;
 }
 
-World make_street_world(std::uint64_t seed, double length) {
+World make_street_world(std::uint64_t seed, double length, const WorldOptions& options) {
   World w;
   constexpr double kStart = -20.0;
   constexpr double kHalfRoad = 7.0;
@@ -188,7 +200,25 @@ World make_street_world(std::uint64_t seed, double length) {
       const double ty = side * (kHalfRoad + 1.5);
       const double trunk = 2.0 + unit(rng);
       w.add_cylinder({tx, ty, 0.0}, 0.15, trunk, surface(0.4F, 5.0F, id++));
-      w.add_sphere({tx, ty, trunk + 1.2}, 1.3 + 0.5 * unit(rng), surface(0.35F, 4.0F, id++));
+      Surface crown = surface(0.35F, 4.0F, id++);
+      if (options.foliage) crown.foliage_free_path_m = kFoliageFreePathM;
+      w.add_sphere({tx, ty, trunk + 1.2}, 1.3 + 0.5 * unit(rng), crown);
+    }
+  }
+  if (options.foliage) {
+    // Hedges along the building fronts: 0.8 m deep, 1-1.6 m tall, 4-14 m long. Their own random
+    // stream, so the rest of the street is the same with and without them.
+    std::mt19937_64 hedge_rng(seed ^ 0x68656467ULL);
+    Surface leaves = surface(0.4F, 5.0F, 6000);
+    leaves.foliage_free_path_m = 0.5F * kFoliageFreePathM;
+    for (const double side : {-1.0, 1.0}) {
+      for (double x = kStart + 5.0 * unit(hedge_rng); x < end;) {
+        const double len = 4.0 + 10.0 * unit(hedge_rng);
+        const double height = 1.0 + 0.6 * unit(hedge_rng);
+        w.add_box({x + len / 2, side * (kHalfRoad + 2.6), height / 2}, {len / 2, 0.4, height / 2},
+                  0.0, leaves);
+        x += len + 6.0 + 20.0 * unit(hedge_rng);
+      }
     }
   }
   w.build();

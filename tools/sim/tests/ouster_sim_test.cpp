@@ -66,6 +66,8 @@ class OusterSimRun {
     options_.imu_noise = mount_.imu_noise;
     options_.seed = 99;
     if (exact_range) {
+      // The basic model only: no divergence (mixed pixels), range walk or noise growth.
+      options_.range = plain_range_model(options_.range);
       options_.range.sigma_m = 0.0;
       options_.range.dropout_probability = 0.0;
     }

@@ -1,0 +1,164 @@
+#include "daemon/config/estimator_defaults.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "drivers/lidar_family.hpp"
+
+namespace livod::daemon {
+namespace {
+
+// The 1-sigma range noise and the divergence the estimator uses where the family tables
+// (drivers/<family>/<family>_family.cpp) have only an accuracy bound (Velodyne "+-3 cm typical")
+// or nothing (Ouster: "differ by hardware revision"). Everything else comes from the family row.
+struct NoiseFacts {
+  std::string_view model;
+  double range_sigma_m;
+  double divergence_deg;  // 0: take the family table's
+  std::string_view source;
+};
+constexpr std::array<NoiseFacts, 5> kNoiseFacts{{
+    {"OS1-64", 0.015, 0.13, "Ouster OS1 datasheet: 1.5 cm at high SNR, 0.13 deg FWHM"},
+    {"OS1-128", 0.015, 0.18, "Ouster OS1 datasheet: 1.5 cm at high SNR, 0.18 deg FWHM"},
+    {"VLP-16", 0.015, 0.17, "Velodyne VLP-16: +-3 cm typical (1.5 cm sigma), 3 mrad divergence"},
+    {"HDL-32E", 0.01, 0.17, "Velodyne HDL-32E: < 2 cm (1 cm sigma), 3 mrad divergence"},
+    {"MID-360", 0.02, 0.2, "Livox Mid-360: 2 cm (10 m), divergence assumed 0.2 deg"},
+}};
+
+// "single", "2nd", "3rd", "4th", ...: "every single point", "every 2nd point".
+std::string ordinal(int n) {
+  if (n == 1) return "single";
+  const int tens = n % 100;
+  const char* suffix = (tens >= 11 && tens <= 13) ? "th"
+                       : n % 10 == 1              ? "st"
+                       : n % 10 == 2              ? "nd"
+                       : n % 10 == 3              ? "rd"
+                                                  : "th";
+  return std::to_string(n) + suffix;
+}
+
+std::string number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+std::optional<LidarModelFacts> lidar_model_facts(std::string_view model) {
+  const auto match = drivers::find_model(model);
+  if (!match || match->model->points_per_second <= 0.0 || match->model->scan_rate_hz <= 0.0) {
+    return std::nullopt;
+  }
+  const drivers::LidarModelInfo& info = *match->model;
+  LidarModelFacts f;
+  f.model = std::string(info.name);
+  f.beams = info.beams;
+  f.scan_rate_hz = info.scan_rate_hz;
+  f.points_per_scan = info.points_per_second / info.scan_rate_hz;
+  f.source = std::string(match->family->vendor) + " datasheet, livod's " +
+             std::string(match->family->driver) + " model table";
+  const auto noise = std::find_if(kNoiseFacts.begin(), kNoiseFacts.end(),
+                                  [&](const NoiseFacts& n) { return n.model == info.name; });
+  if (noise != kNoiseFacts.end()) {
+    f.range_sigma_m = noise->range_sigma_m;
+    f.divergence_deg = noise->divergence_deg;
+    f.source = std::string(noise->source);
+  } else if (info.range_noise_m) {
+    f.range_sigma_m = *info.range_noise_m;
+  } else {
+    f.range_sigma_m = estimator::LioParams{}.dept_err;
+    f.source += "; no range noise in livod's sources: FAST-LIVO2's";
+  }
+  if (f.divergence_deg <= 0.0) {
+    if (info.beam_divergence_rad) {
+      f.divergence_deg = *info.beam_divergence_rad * 180.0 / std::numbers::pi;
+    } else {
+      f.divergence_deg = kAssumedDivergenceDeg;
+      f.divergence_assumed = true;
+    }
+  }
+  return f;
+}
+
+std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarModelFacts>& facts,
+                                                    std::string_view model,
+                                                    const std::set<std::string>& given,
+                                                    estimator::EstimatorParams& params) {
+  auto& lio = params.lio;
+  std::vector<EstimatorChoice> choices;
+  // A key of the file wins; anything else is set here and explained.
+  const auto choose = [&](const char* key, auto& field, auto value, const std::string& reason) {
+    if (given.contains(key)) {
+      choices.push_back({key, number(static_cast<double>(field)), "set in the configuration"});
+      return;
+    }
+    field = value;
+    choices.push_back({key, number(static_cast<double>(field)), reason});
+  };
+  const std::string name = model.empty() ? std::string("unknown model") : std::string(model);
+
+  // The update's cost per frame follows the points it works on: a fixed budget per scan, whatever
+  // the sensor and the place, is what keeps every model real-time (lio/point_budget.hpp).
+  choose("lio.point_budget", lio.point_budget, kDefaultPointBudget,
+         "points per scan the update works on: the downsampling cell grows above "
+         "filter_size_surf until a scan fits (real time on every sensor)");
+  choose("lio.filter_size_surf", lio.filter_size_surf, 0.1,
+         "smallest downsampling cell (FAST-LIVO2); the point budget grows it where a scan has more "
+         "points");
+  if (!facts) {
+    choose("lio.point_filter_num", lio.point_filter_num, 1,
+           name + " has no model facts: every point, the point budget bounds the cost");
+    choices.push_back({"lio.dept_err", number(lio.dept_err),
+                       given.contains("lio.dept_err")
+                           ? "set in the configuration"
+                           : name + " has no model facts: FAST-LIVO2's range noise"});
+    choices.push_back({"lio.beam_err_deg", number(lio.beam_err_deg),
+                       given.contains("lio.beam_err_deg")
+                           ? "set in the configuration"
+                           : name + " has no model facts: FAST-LIVO2's bearing noise"});
+    return choices;
+  }
+  // Undistortion and downsampling cost per raw point: keep every n-th point of each ring so that a
+  // scan brings at most about kRawPointsPerScan.
+  const int stride =
+      std::max(1, static_cast<int>(std::lround(facts->points_per_scan / kRawPointsPerScan)));
+  std::ostringstream why_stride;
+  why_stride << name << " brings " << facts->points_per_scan << " points per "
+             << facts->scan_rate_hz << " Hz scan; every " << ordinal(stride)
+             << " point of each ring keeps about " << std::lround(facts->points_per_scan / stride);
+  choose("lio.point_filter_num", lio.point_filter_num, stride, why_stride.str());
+  // The noise model of the points: the datasheet's range noise, and a bearing noise of half the
+  // beam divergence (the footprint's half width: where in it the echo comes from is unknown).
+  choose("lio.dept_err", lio.dept_err, std::max(0.01, facts->range_sigma_m),
+         name + " range noise " + number(facts->range_sigma_m) + " m (" +
+             std::string(facts->source) + ")");
+  choose("lio.beam_err_deg", lio.beam_err_deg, std::max(0.05, 0.5 * facts->divergence_deg),
+         "half the beam divergence of " + number(facts->divergence_deg) + " deg" +
+             (facts->divergence_assumed
+                  ? " (not in livod's sources for " + name + ": a spinning LiDAR's 3 mrad assumed)"
+                  : std::string()));
+  return choices;
+}
+
+int estimator_lidar_index(const LivodConfig& config) {
+  if (config.body_is_internal_imu) return config.body_sensor_index;
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const auto& s = config.sensors[i];
+    if (s.enabled && sensor_kind(s.driver) == SensorKind::lidar) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void apply_estimator_defaults(LivodConfig& config) {
+  const int lidar = estimator_lidar_index(config);
+  if (lidar < 0) return;
+  const std::string& model = config.sensors[static_cast<std::size_t>(lidar)].model;
+  config.estimator_choices = estimator_settings_for(lidar_model_facts(model), model,
+                                                    config.estimator_given, config.estimator);
+}
+
+}  // namespace livod::daemon

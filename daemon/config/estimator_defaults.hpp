@@ -1,0 +1,67 @@
+#pragma once
+// Estimator settings that fit the sensor (issue 15): the LiDAR's model facts (beams, points per
+// scan, range noise, beam divergence) decide the point selection and the noise model, so that the
+// configuration `livod sim` writes - no `estimator:` section - runs in real time at full accuracy
+// on every model. A key the file sets is never touched. check-config prints each effective value
+// with its reason.
+//
+// The model facts come from the LiDAR families' model tables (drivers/lidar_family.hpp: beams,
+// points per second, scan rate, datasheet range error and divergence), which every decoded model
+// has; a short table in estimator_defaults.cpp adds the 1-sigma range noise and divergence where a
+// family table has only an accuracy bound or nothing. One function turns facts into parameters
+// (estimator_settings_for). A new model gets its defaults from its family row.
+
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "daemon/config/config.hpp"
+#include "estimator/params.hpp"
+
+namespace livod::daemon {
+
+// What the estimator defaults need to know about a LiDAR model, from its datasheet.
+struct LidarModelFacts {
+  std::string model;                // canonical name (SensorConfig::model)
+  int beams = 0;                    // rings (Livox: lasers / lines)
+  double points_per_scan = 0.0;     // single return, default mode (default scan rate)
+  double scan_rate_hz = 10.0;       // the default scan rate points_per_scan refers to
+  double range_sigma_m = 0.0;       // range noise, 1 sigma, of a strong return
+  double divergence_deg = 0.0;      // beam divergence (FWHM) of the wider axis
+  bool divergence_assumed = false;  // no source gives it: kAssumedDivergenceDeg
+  std::string source;               // where the figures come from
+};
+
+// Beam divergence of a model whose sources give none: the Velodyne manuals' 3 mrad of a spinning
+// LiDAR's wider axis (VLS-128 manual table F-1).
+inline constexpr double kAssumedDivergenceDeg = 0.17;
+
+// The facts of a model (any family's canonical name or alias), or nullopt when no family table
+// knows it or its row has no point rate (Ouster's generic "OS": the metadata tells).
+std::optional<LidarModelFacts> lidar_model_facts(std::string_view model);
+
+// The estimator settings for a model (nullopt facts: a model the table does not know) with the
+// reason for each, applied to `params` except for the keys in `given` ("lio.point_filter_num",
+// ...), which the configuration set.
+std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarModelFacts>& facts,
+                                                    std::string_view model,
+                                                    const std::set<std::string>& given,
+                                                    estimator::EstimatorParams& params);
+
+// The LiDAR the estimator runs on: the body IMU's own LiDAR when the body is an internal IMU, else
+// the first enabled LiDAR; -1 when there is none.
+int estimator_lidar_index(const LivodConfig& config);
+
+// Applies estimator_settings_for() for the configuration's estimator LiDAR to config.estimator and
+// records the choices in config.estimator_choices.
+void apply_estimator_defaults(LivodConfig& config);
+
+// Per-scan points the update works on (lio.point_budget) and the raw points per scan the point
+// filter keeps at most (lio.point_filter_num): the budget that keeps a frame within the real-time
+// target on the reference machine (docs/estimator.md, "Defaults per sensor").
+inline constexpr int kDefaultPointBudget = 8000;
+inline constexpr double kRawPointsPerScan = 35000.0;
+
+}  // namespace livod::daemon

@@ -1,0 +1,153 @@
+// The estimator settings that follow the LiDAR model (estimator_defaults.hpp): chosen from the
+// model's facts when the file does not set them, never over a value the file sets, and printed
+// with their reasons by check-config.
+
+#include "daemon/config/estimator_defaults.hpp"
+
+#include <gtest/gtest.h>
+
+#include "daemon/config/summary.hpp"
+#include "daemon/config/tests/config_test_support.hpp"
+
+namespace livod::daemon {
+namespace {
+
+using test::dump;
+using test::load;
+
+// An Ouster as the body (its internal IMU), like the configurations `livod sim` writes.
+std::string ouster_config(const std::string& model, const std::string& estimator = "") {
+  std::string yaml = R"(body_frame: os1.imu
+sensors:
+  - name: os1
+    driver: ouster
+    model: )" + model +
+                     R"(
+    source: {udp: {sensor_address: 192.168.1.10}}
+    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
+)";
+  if (!estimator.empty()) yaml += "estimator: " + estimator + "\n";
+  return yaml;
+}
+
+const EstimatorChoice* choice(const LivodConfig& c, const std::string& key) {
+  for (const auto& ch : c.estimator_choices) {
+    if (ch.key == key) return &ch;
+  }
+  return nullptr;
+}
+
+// Every model of every family table with a point rate has facts (Hesai, the other Velodynes and
+// Livox models included); Ouster's generic "OS" names no beam count, so it has none.
+TEST(EstimatorDefaults, EveryModelOfTheFamilyTablesHasItsFacts) {
+  for (const char* model : {"OS1-64", "OS1-128", "VLP-16", "HDL-32E", "AVIA", "MID-360",
+                            "PANDARXT32", "XT32", "PANDAR40P", "VLS-128", "OS0-32", "HAP"}) {
+    const auto facts = lidar_model_facts(model);
+    ASSERT_TRUE(facts) << model;
+    EXPECT_GT(facts->beams, 0);
+    EXPECT_GT(facts->points_per_scan, 1000.0);
+    EXPECT_GT(facts->range_sigma_m, 0.0);
+    EXPECT_GT(facts->divergence_deg, 0.0);
+    EXPECT_FALSE(facts->source.empty());
+  }
+  EXPECT_FALSE(lidar_model_facts("NO-SUCH-LIDAR"));
+  EXPECT_FALSE(lidar_model_facts("OS"));
+}
+
+// The Hesai PandarXT-32 (640 k points/s): every 2nd point of each ring, its datasheet's 1 cm, and
+// a divergence its sources do not give, said so.
+TEST(EstimatorDefaults, HesaiGetsItsDefaultsFromItsFamilyTable) {
+  const auto facts = lidar_model_facts("PandarXT-32");
+  ASSERT_TRUE(facts);
+  EXPECT_EQ(facts->model, "PANDARXT32");
+  EXPECT_EQ(facts->beams, 32);
+  EXPECT_DOUBLE_EQ(facts->points_per_scan, 64000.0);
+  EXPECT_DOUBLE_EQ(facts->range_sigma_m, 0.01);
+  EXPECT_TRUE(facts->divergence_assumed);
+  estimator::EstimatorParams params;
+  const auto choices = estimator_settings_for(facts, "PANDARXT32", {}, params);
+  EXPECT_EQ(params.lio.point_filter_num, 2);
+  EXPECT_EQ(params.lio.point_budget, kDefaultPointBudget);
+  EXPECT_DOUBLE_EQ(params.lio.dept_err, 0.01);
+  EXPECT_DOUBLE_EQ(params.lio.beam_err_deg, 0.5 * kAssumedDivergenceDeg);
+  bool assumed = false;
+  for (const auto& c : choices) {
+    assumed = assumed || (c.key == "lio.beam_err_deg" &&
+                          c.reason.find("not in livod's sources") != std::string::npos);
+  }
+  EXPECT_TRUE(assumed);
+}
+
+// A 128-beam Ouster brings 131 k points per scan: every 4th point of each ring and the point
+// budget keep a frame real-time; a 16-beam Velodyne keeps every point.
+TEST(EstimatorDefaults, PointSelectionFollowsThePointsPerScan) {
+  const auto os128 = load(ouster_config("OS1-128"));
+  ASSERT_TRUE(os128.ok()) << dump(os128);
+  EXPECT_EQ(os128.config.estimator.lio.point_filter_num, 4);
+  EXPECT_EQ(os128.config.estimator.lio.point_budget, kDefaultPointBudget);
+  const auto os64 = load(ouster_config("OS1-64"));
+  ASSERT_TRUE(os64.ok()) << dump(os64);
+  EXPECT_EQ(os64.config.estimator.lio.point_filter_num, 2);
+  const auto vlp = load(test::minimal_config());
+  ASSERT_TRUE(vlp.ok()) << dump(vlp);
+  EXPECT_EQ(vlp.config.estimator.lio.point_filter_num, 1);
+  EXPECT_EQ(vlp.config.estimator.lio.point_budget, kDefaultPointBudget);
+  // The noise model: the datasheet's range noise, half the beam divergence.
+  EXPECT_DOUBLE_EQ(os128.config.estimator.lio.dept_err, 0.015);
+  EXPECT_DOUBLE_EQ(os128.config.estimator.lio.beam_err_deg, 0.09);
+}
+
+TEST(EstimatorDefaults, ExplicitSettingsWin) {
+  const auto r = load(ouster_config(
+      "OS1-128",
+      "{lio: {point_filter_num: 1, point_budget: 0, dept_err: 0.03, beam_err_deg: 0.2, "
+      "filter_size_surf: 0.3}}"));
+  ASSERT_TRUE(r.ok()) << dump(r);
+  const auto& lio = r.config.estimator.lio;
+  EXPECT_EQ(lio.point_filter_num, 1);
+  EXPECT_EQ(lio.point_budget, 0);
+  EXPECT_DOUBLE_EQ(lio.dept_err, 0.03);
+  EXPECT_DOUBLE_EQ(lio.beam_err_deg, 0.2);
+  EXPECT_DOUBLE_EQ(lio.filter_size_surf, 0.3);
+  for (const auto& c : r.config.estimator_choices) {
+    EXPECT_EQ(c.reason, "set in the configuration") << c.key;
+  }
+  // Setting one key leaves the others to the model.
+  const auto one = load(ouster_config("OS1-128", "{lio: {dept_err: 0.03}}"));
+  ASSERT_TRUE(one.ok()) << dump(one);
+  EXPECT_DOUBLE_EQ(one.config.estimator.lio.dept_err, 0.03);
+  EXPECT_EQ(one.config.estimator.lio.point_filter_num, 4);
+}
+
+TEST(EstimatorDefaults, UnknownModelGetsTheBudgetAndSaysWhy) {
+  std::set<std::string> given;
+  estimator::EstimatorParams params;
+  const auto choices = estimator_settings_for(std::nullopt, "XYZ-99", given, params);
+  EXPECT_EQ(params.lio.point_budget, kDefaultPointBudget);
+  EXPECT_EQ(params.lio.point_filter_num, 1);
+  EXPECT_DOUBLE_EQ(params.lio.dept_err, estimator::LioParams{}.dept_err);
+  bool explained = false;
+  for (const auto& c : choices) {
+    explained = explained || c.reason.find("XYZ-99 has no model facts") != std::string::npos;
+  }
+  EXPECT_TRUE(explained);
+}
+
+// check-config prints every model-dependent value and why.
+TEST(EstimatorDefaults, CheckConfigPrintsTheEffectiveValuesAndWhy) {
+  const auto r = load(ouster_config("OS1-128", "{lio: {dept_err: 0.03}}"));
+  ASSERT_TRUE(r.ok()) << dump(r);
+  const std::string summary = summarize_config(r.config);
+  EXPECT_NE(summary.find("estimator on os1 (OS1-128), effective values:"), std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("lio.point_filter_num 4"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("131072 points per 10 Hz scan"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("lio.dept_err 0.03"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("set in the configuration"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("lio.point_budget 8000"), std::string::npos) << summary;
+  ASSERT_NE(choice(r.config, "lio.beam_err_deg"), nullptr);
+  EXPECT_NE(choice(r.config, "lio.beam_err_deg")->reason.find("divergence"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace livod::daemon

@@ -1,0 +1,41 @@
+#pragma once
+// The downsampling cell of each scan, chosen so that about `budget` points go into the update
+// (LioParams::point_budget): the per-frame cost of association, the update and the map insertion
+// grows with that count, the number of points a scan brings does not matter to it. A 128-beam
+// Ouster outdoors and a Livox in a small room then cost about the same per scan, and the same
+// sensor keeps its detail indoors (small cells) and its speed outdoors (large cells) without being
+// told where it is.
+//
+// Surface points per scan fall as 1 / cell^2, so the next cell is the last one scaled by
+// sqrt(points / budget), within [min_cell, max_cell]. A scan that brings far more points than the
+// last one (entering a street from a building) is downsampled once more with the corrected cell,
+// so no frame runs with several times the budget. Depends only on the data: replays stay
+// deterministic.
+
+#include <cstddef>
+
+namespace livod::estimator {
+
+class PointBudget {
+ public:
+  PointBudget(int budget, double min_cell, double max_cell);
+
+  // The cell to downsample the next scan with.
+  [[nodiscard]] double cell() const { return cell_; }
+  // A scan downsampled with cell() kept `points`: adapts cell() and returns true when the scan
+  // overshot so far (more than kRedoFactor x budget with room to grow) that it should be
+  // downsampled again with the new cell().
+  bool observe(std::size_t points);
+
+  [[nodiscard]] int budget() const { return budget_; }
+
+  static constexpr double kRedoFactor = 1.5;
+
+ private:
+  int budget_;
+  double min_cell_;
+  double max_cell_;
+  double cell_;
+};
+
+}  // namespace livod::estimator
