@@ -61,7 +61,7 @@ struct LioParams {
   int max_points_num = 50;          // a plane freezes after this many points
   std::vector<int> layer_init_num = {5, 5, 5, 5, 5};  // points to fit a plane, per layer
   int plane_update_points = 5;    // new points that trigger a plane refit (hard-coded upstream)
-  int point_filter_num = 1;       // keep every n-th point
+  int point_filter_num = 1;       // keep one point in n (lio/point_filter.hpp)
   double blind = 0.8;             // minimum range (m)
   double filter_size_surf = 0.1;  // scan voxel-grid downsampling (m); 0 disables
   // > 0: points per scan after downsampling. The cell grows above filter_size_surf (up to
@@ -73,10 +73,11 @@ struct LioParams {
 };
 
 // One LiDAR's own point settings where several LiDARs feed the estimator (docs/estimator.md
-// "Several LiDARs"): an unset noise value is LioParams' (the estimator-wide one).
+// "Several LiDARs"): an unset value is LioParams' (the estimator-wide one).
 struct LidarLioParams {
-  std::optional<double> dept_err;      // range noise sigma (m) of this LiDAR's points
-  std::optional<double> beam_err_deg;  // bearing noise sigma (deg) of this LiDAR's points
+  std::optional<double> dept_err;       // range noise sigma (m) of this LiDAR's points
+  std::optional<double> beam_err_deg;   // bearing noise sigma (deg) of this LiDAR's points
+  std::optional<int> point_filter_num;  // one point in n of this LiDAR's (lio/point_filter.hpp)
   // Its points are inserted into the map. false: they are matched against the planes the other
   // LiDARs build, and build none (a sparse spinning LiDAR cuts a voxel in single-ring lines,
   // which pass the planarity test as planes whose tilt about the line is unobserved).

@@ -7,6 +7,7 @@
 
 #include "core/so3.hpp"
 #include "estimator/imu/propagation.hpp"
+#include "estimator/lio/point_filter.hpp"
 
 namespace livod::estimator {
 namespace {
@@ -302,44 +303,54 @@ void LioPipeline::visual_update(const MeasurementGroup& group, bool lio_matched,
 void LioPipeline::prepare_points(const LidarScan& scan, std::size_t lidar, MappedTime t,
                                  FrameTimings& timings) {
   const auto& lio = options_.params.lio;
-  // Select points: valid, beyond the blind range, every point_filter_num-th of each ring. The
-  // stride counts per ring because scans interleave their rings (Velodyne firings, Ouster
-  // columns, Livox lines): every n-th point of the scan would keep only the rings whose index
-  // shares n's factors - half of an HDL-32E's fan at n = 2, one Mid-360 line in four at n = 4 -
-  // and the lost geometry showed as drift on long drives.
+  // Select points: valid, beyond the blind range, one in point_filter_num (lio/point_filter.hpp).
+  // Then the voxel grid, on the raw coordinates in the LiDAR's frame: the selection depends on
+  // the measured points only - not on their time stamps (undistortion), their order or where the
+  // scan was cut - so every container of a recording, live or replayed, keeps the same points.
+  // Undistortion then runs on the kept points only.
   auto t0 = std::chrono::steady_clock::now();
   indices_.clear();
+  raw_points_.clear();
   const double blind2 = lio.blind * lio.blind;
-  const auto stride = static_cast<std::uint32_t>(std::max(1, lio.point_filter_num));
-  ring_counts_.clear();
+  const auto stride = static_cast<std::uint32_t>(
+      std::max(1, options_.lidar_lio[lidar].point_filter_num.value_or(lio.point_filter_num)));
   for (std::uint32_t i = 0; i < scan.size(); ++i) {
     if (!scan.valid[i]) continue;
-    const std::uint16_t ring = i < scan.ring.size() ? scan.ring[i] : 0;
-    if (ring >= ring_counts_.size()) ring_counts_.resize(ring + 1U, 0);
-    if (ring_counts_[ring]++ % stride != 0) continue;
-    if (scan.point(i).cast<double>().squaredNorm() < blind2) continue;
+    const Eigen::Vector3f p = scan.point(i);
+    if (!point_filter_keeps(p, stride)) continue;
+    const Eigen::Vector3d pd = p.cast<double>();
+    if (pd.squaredNorm() < blind2) continue;
     indices_.push_back(i);
+    raw_points_.push_back(pd);
   }
-  undistort_points(track_, T_imu_lidars_[lidar], t, scan, indices_, lidar_points_, options_.runner);
   timings.undistort_ms += ms_since(t0);
 
-  // Downsampled in the LiDAR's own frame, so that each point keeps its LiDAR (its ray and noise).
   t0 = std::chrono::steady_clock::now();
   if (point_budget_) {
     // The cell the budget chose. With one LiDAR a scan far over the budget is redone at once with
     // the corrected cell; with several the budget counts the frame's total (process_group) and the
     // cell follows from the next frame.
     downsampler_.set_cell(point_budget_->cell());
-    downsampler_.apply(lidar_points_, downsampled_);
-    if (T_imu_lidars_.size() == 1 && point_budget_->observe(downsampled_.size())) {
+    kept_ = indices_;
+    downsampler_.select(raw_points_, kept_);
+    if (T_imu_lidars_.size() == 1 && point_budget_->observe(kept_.size())) {
       downsampler_.set_cell(point_budget_->cell());
-      downsampler_.apply(lidar_points_, downsampled_);
-      point_budget_->observe(downsampled_.size());
+      kept_ = indices_;
+      downsampler_.select(raw_points_, kept_);
+      point_budget_->observe(kept_.size());
     }
-    lidar_points_.swap(downsampled_);
+    indices_.swap(kept_);
   } else {
-    downsampler_.apply(lidar_points_);
+    downsampler_.select(raw_points_, indices_);
   }
+  timings.downsample_ms += ms_since(t0);
+
+  // Undistorted in the LiDAR's own frame, so that each point keeps its LiDAR (its ray and noise).
+  t0 = std::chrono::steady_clock::now();
+  undistort_points(track_, T_imu_lidars_[lidar], t, scan, indices_, lidar_points_, options_.runner);
+  timings.undistort_ms += ms_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
   spatial_order_.apply(lidar_points_, lio.voxel_size);
   if (undistorted_.empty()) {
     undistorted_.swap(lidar_points_);

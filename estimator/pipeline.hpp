@@ -228,7 +228,8 @@ class LioPipeline {
   std::vector<CovPoint> map_points_;            // the points that do (when not all LiDARs build)
   VoxelGridDownsampler downsampler_;
   std::optional<PointBudget> point_budget_;
-  std::vector<Eigen::Vector3d> downsampled_;
+  std::vector<Eigen::Vector3d> raw_points_;  // the selected points in the LiDAR's frame
+  std::vector<std::uint32_t> kept_;          // indices the voxel grid keeps
   SpatialOrder spatial_order_;
   Belief belief_;
   MappedTime state_time_;
@@ -251,7 +252,6 @@ class LioPipeline {
   MappedTime init_time_;  // when the initialisation ended: scans must begin after it
   ImuPoseTrack track_;
   std::vector<std::uint32_t> indices_;
-  std::vector<std::uint32_t> ring_counts_;  // valid points seen per ring (point_filter_num)
   std::vector<Eigen::Vector3d> undistorted_;
   std::vector<Eigen::Vector3d> lidar_points_;  // one LiDAR's, before joining undistorted_
   std::vector<std::uint32_t> point_lidar_;     // per point of undistorted_: its LiDAR

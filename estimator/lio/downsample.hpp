@@ -11,11 +11,18 @@
 // fell short along the road). A measured point lies on a surface; the one nearest to the centroid
 // keeps the grid's even spread and, on a plane, its noise is as likely above as below.
 //
+// Which point a cell keeps depends on the set of points only, not on their order: the centroid is
+// an exact integer sum of coordinates quantised to kQuantumM (floating-point sums in arrival order
+// differ in the last bits between two orders, and so could the nearest point), and equally near
+// points are told apart by their quantised coordinates, not by their index. The same scan delivered
+// by another container (bag, pcap, folder) or cut at another packet then keeps the same points.
+//
 // The cell table is kept between calls so that steady state does not allocate: an
 // open-addressing table of packed cell keys whose slots are stamped with the call's generation,
 // so a new call needs no clearing pass.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -24,6 +31,10 @@ namespace livod::estimator {
 
 class VoxelGridDownsampler {
  public:
+  // The coordinate quantum of the centroid sums (0.1 mm: far below any LiDAR's range noise; an
+  // int64 sum of 2^20 points of +-10 km each stays exact).
+  static constexpr double kQuantumM = 1e-4;
+
   explicit VoxelGridDownsampler(double cell_size)
       : cell_(cell_size), inv_cell_(cell_size > 0.0 ? 1.0 / cell_size : 0.0) {}
 
@@ -33,6 +44,9 @@ class VoxelGridDownsampler {
   void apply(std::vector<Eigen::Vector3d>& points);
   // The same into `out` (in is left as it is).
   void apply(const std::vector<Eigen::Vector3d>& in, std::vector<Eigen::Vector3d>& out);
+  // The same selection as indices: `points[k]` is the point of `indices[k]`; on return `indices`
+  // holds the indices of the kept points (cells in order of first appearance).
+  void select(const std::vector<Eigen::Vector3d>& points, std::vector<std::uint32_t>& indices);
 
   void set_cell(double cell_size) {
     cell_ = cell_size;
@@ -47,13 +61,17 @@ class VoxelGridDownsampler {
     std::uint32_t cell = 0;        // index into cells_
   };
   struct Cell {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::array<std::int64_t, 3> sum{0, 0, 0};  // quantised coordinates
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     double best_d2 = std::numeric_limits<double>::infinity();
-    std::uint32_t best = 0;  // index of the point kept
+    std::array<std::int64_t, 3> best_q{0, 0, 0};  // quantised coordinates of the point kept
+    std::uint32_t best = 0;  // index (into the call's points) of the point kept
     int count = 0;
   };
   void reserve_slots(std::size_t points);
+  // Fills best of each cell of `points` into cells_ (cells in order of first appearance); false
+  // when the cell size disables downsampling.
+  bool choose(const std::vector<Eigen::Vector3d>& points);
 
   double cell_;
   double inv_cell_;
@@ -62,5 +80,8 @@ class VoxelGridDownsampler {
   std::vector<std::uint32_t> cell_of_point_;
   std::uint32_t generation_ = 0;
 };
+
+// The coordinates of p quantised to `quantum` (rounded to the nearest multiple).
+std::array<std::int64_t, 3> quantise(const Eigen::Vector3d& p, double inv_quantum);
 
 }  // namespace livod::estimator

@@ -11,6 +11,12 @@
 // last one (entering a street from a building) is downsampled once more with the corrected cell,
 // so no frame runs with several times the budget. Depends only on the data: replays stay
 // deterministic.
+//
+// The cell moves on a ladder, min_cell x 2^(k/8) (capped at max_cell), not continuously: the same
+// recording delivered by another container (bag, pcap) or cut a packet apart brings a few points
+// more or fewer per scan, and a cell that followed the count continuously would differ in the last
+// digits, and so would every scan's selection after it. On the ladder a count that differs by a few
+// points gives the same step unless it sits right at a step's edge.
 
 #include <cstddef>
 
@@ -30,11 +36,15 @@ class PointBudget {
   [[nodiscard]] int budget() const { return budget_; }
 
   static constexpr double kRedoFactor = 1.5;
+  // Steps of the cell ladder per doubling of the cell.
+  static constexpr int kStepsPerOctave = 8;
 
  private:
   int budget_;
   double min_cell_;
   double max_cell_;
+  int max_step_;
+  int step_ = 0;  // cell() is min_cell x 2^(step_ / kStepsPerOctave)
   double cell_;
 };
 

@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <set>
 #include <tuple>
 
 #include "estimator/lio/point_budget.hpp"
+#include "estimator/lio/point_filter.hpp"
 
 namespace livod::estimator {
 namespace {
@@ -94,6 +96,60 @@ TEST(VoxelGridDownsampler, UnbiasedOnANoisyPlane) {
   EXPECT_LT(std::abs(sum / static_cast<double>(n)), 4.0 * 0.02 / std::sqrt(static_cast<double>(n)));
 }
 
+// The kept points are a function of the set of points, not of their order: the same scan
+// delivered by another container, or cut at another packet, keeps the same points. Exact ties
+// (points on a lattice, equally far from their cell's centroid) are decided by the coordinates,
+// not by which point came first.
+TEST(VoxelGridDownsampler, SelectionDoesNotDependOnThePointOrder) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 20000; ++i) points.emplace_back(u(rng), u(rng), 0.5 * u(rng));
+  // A lattice cell: the eight corners of a cube around the middle of [0, 1)^3, all equally near
+  // the centroid.
+  for (const double x : {0.25, 0.75}) {
+    for (const double y : {0.25, 0.75}) {
+      for (const double z : {0.25, 0.75}) points.emplace_back(10.0 + x, 10.0 + y, z);
+    }
+  }
+  const auto kept_set = [](std::vector<Eigen::Vector3d> p) {
+    VoxelGridDownsampler ds(0.5);
+    ds.apply(p);
+    std::set<std::tuple<double, double, double>> s;
+    for (const auto& q : p) s.insert({q.x(), q.y(), q.z()});
+    return s;
+  };
+  const auto reference = kept_set(points);
+  EXPECT_TRUE(reference.contains({10.25, 10.25, 0.25}));  // the smallest of the tied corners
+  for (int trial = 0; trial < 5; ++trial) {
+    std::shuffle(points.begin(), points.end(), rng);
+    EXPECT_EQ(kept_set(points), reference) << "order " << trial;
+  }
+  // Reversed, too (the tied corner that came first before now comes last).
+  std::reverse(points.begin(), points.end());
+  EXPECT_EQ(kept_set(points), reference);
+}
+
+// select() keeps the same points as apply(), as indices of the caller's points.
+TEST(VoxelGridDownsampler, SelectKeepsTheIndicesOfTheSamePoints) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::uint32_t> indices;
+  for (int i = 0; i < 3000; ++i) {
+    points.emplace_back(u(rng), u(rng), u(rng));
+    indices.push_back(static_cast<std::uint32_t>(7 * i + 1));  // the caller's numbering
+  }
+  VoxelGridDownsampler ds(0.4);
+  std::vector<Eigen::Vector3d> applied;
+  ds.apply(points, applied);
+  ds.select(points, indices);
+  ASSERT_EQ(indices.size(), applied.size());
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    EXPECT_EQ(points[(indices[k] - 1) / 7], applied[k]) << k;
+  }
+}
+
 // A scan of a flat area: points on a plane, count falling as 1 / cell^2.
 std::vector<Eigen::Vector3d> plane_scan(double side, double spacing) {
   std::vector<Eigen::Vector3d> points;
@@ -150,6 +206,68 @@ TEST(PointBudget, AskForARedoOnlyWhenFarOverAndAbleToGrow) {
   EXPECT_TRUE(b.observe(9000));  // far over: redo this one
   PointBudget capped(1000, 0.5, 0.5);
   EXPECT_FALSE(capped.observe(9000));  // cannot grow: redoing would not help
+}
+
+// The cell is always a step of the ladder min x 2^(k/8), and counts that differ by a few points
+// (another container, another scan cut) give the same cell.
+TEST(PointBudget, CellStaysOnTheLadderSoNearbyCountsGiveTheSameCell) {
+  PointBudget a(8000, 0.1, 0.5);
+  PointBudget b(8000, 0.1, 0.5);
+  // The counts of a street drive entering a room and back, b's 0.5 % above a's.
+  const std::vector<double> counts = {30000, 21000, 14000, 10500, 9000, 4000, 3000, 6000, 12000};
+  for (const double c : counts) {
+    a.observe(static_cast<std::size_t>(c));
+    b.observe(static_cast<std::size_t>(c * 1.005));
+    EXPECT_EQ(a.cell(), b.cell()) << c;
+    const double steps = PointBudget::kStepsPerOctave * std::log2(a.cell() / 0.1);
+    if (a.cell() < 0.5) {
+      EXPECT_NEAR(steps, std::round(steps), 1e-9) << a.cell();
+    }
+    EXPECT_GE(a.cell(), 0.1);
+    EXPECT_LE(a.cell(), 0.5);
+  }
+}
+
+// point_filter_num by the point's own coordinates: about one point in n of every ring (the rings
+// of a spinning LiDAR interleave, so every n-th point of the scan would drop whole rings), and the
+// same points whatever their order in the scan.
+TEST(PointFilter, KeepsOneInNOfEveryRingWhateverTheOrder) {
+  constexpr int kRings = 32;
+  constexpr int kColumns = 2000;
+  constexpr std::uint32_t kN = 4;
+  std::vector<std::vector<Eigen::Vector3f>> rings(kRings);
+  std::vector<Eigen::Vector3f> scan;  // column by column: the rings interleave
+  for (int c = 0; c < kColumns; ++c) {
+    const double az = 2.0 * M_PI * c / kColumns;
+    for (int r = 0; r < kRings; ++r) {
+      const double el = (-15.0 + r) * M_PI / 180.0;
+      const double range = 12.0 + 0.5 * std::sin(3.0 * az);
+      const Eigen::Vector3f p(static_cast<float>(range * std::cos(el) * std::cos(az)),
+                              static_cast<float>(range * std::cos(el) * std::sin(az)),
+                              static_cast<float>(range * std::sin(el)));
+      rings[r].push_back(p);
+      scan.push_back(p);
+    }
+  }
+  for (int r = 0; r < kRings; ++r) {
+    const auto kept = std::count_if(rings[r].begin(), rings[r].end(),
+                                    [](const auto& p) { return point_filter_keeps(p, kN); });
+    // Binomial(2000, 1/4): sd 19; 5 sd.
+    EXPECT_NEAR(static_cast<double>(kept), kColumns / 4.0, 100.0) << "ring " << r;
+  }
+  // The kept points of the scan, and of the scan starting elsewhere (another cut) and shuffled.
+  const auto kept_set = [&](const std::vector<Eigen::Vector3f>& points) {
+    std::set<std::tuple<float, float, float>> s;
+    for (const auto& p : points) {
+      if (point_filter_keeps(p, kN)) s.insert({p.x(), p.y(), p.z()});
+    }
+    return s;
+  };
+  auto other = scan;
+  std::rotate(other.begin(), other.begin() + 12345, other.end());
+  std::shuffle(other.begin(), other.end(), std::mt19937(2));
+  EXPECT_EQ(kept_set(other), kept_set(scan));
+  EXPECT_TRUE(point_filter_keeps(scan.front(), 1));
 }
 
 }  // namespace
