@@ -206,9 +206,11 @@ struct SensorConfig {
   ClockConfig clock;
   int ring_capacity = 0;  // packets / samples / frames; default depends on the sensor kind
   InternalImuConfig imu;
-  // LiDARs: this LiDAR's own point settings in the estimator (`lio:`; unset noise values are
-  // estimator.lio's).
+  // LiDARs: this LiDAR's own point settings in the estimator (`lio:`; unset values are
+  // estimator.lio's). With several LiDARs the model defaults fill the values the file leaves to
+  // them from this LiDAR's own model (apply_estimator_defaults), and name them in lio_from_model.
   estimator::LidarLioParams lio;
+  std::set<std::string> lio_from_model;  // "dept_err", "beam_err_deg", "point_filter_num"
   CameraConfig camera;
   CanConfig can;
   SerialConfig serial;

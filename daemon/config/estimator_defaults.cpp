@@ -28,18 +28,6 @@ constexpr std::array<NoiseFacts, 5> kNoiseFacts{{
     {"MID-360", 0.02, 0.2, "Livox Mid-360: 2 cm (10 m), divergence assumed 0.2 deg"},
 }};
 
-// "single", "2nd", "3rd", "4th", ...: "every single point", "every 2nd point".
-std::string ordinal(int n) {
-  if (n == 1) return "single";
-  const int tens = n % 100;
-  const char* suffix = (tens >= 11 && tens <= 13) ? "th"
-                       : n % 10 == 1              ? "st"
-                       : n % 10 == 2              ? "nd"
-                       : n % 10 == 3              ? "rd"
-                                                  : "th";
-  return std::to_string(n) + suffix;
-}
-
 std::string number(double v) {
   std::ostringstream os;
   os << v;
@@ -122,14 +110,15 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
                            : name + " has no model facts: FAST-LIVO2's bearing noise"});
     return choices;
   }
-  // Undistortion and downsampling cost per raw point: keep every n-th point of each ring so that a
-  // scan brings at most about kRawPointsPerScan.
+  // Undistortion and downsampling cost per raw point: keep one point in n (alike in every ring,
+  // lio/point_filter.hpp) so that a scan brings at most about kRawPointsPerScan.
   const int stride =
       std::max(1, static_cast<int>(std::lround(facts->points_per_scan / kRawPointsPerScan)));
   std::ostringstream why_stride;
   why_stride << name << " brings " << facts->points_per_scan << " points per "
-             << facts->scan_rate_hz << " Hz scan; every " << ordinal(stride)
-             << " point of each ring keeps about " << std::lround(facts->points_per_scan / stride);
+             << facts->scan_rate_hz << " Hz scan; one point in " << stride
+             << (stride > 1 ? " (alike in every ring)" : "") << " keeps about "
+             << std::lround(facts->points_per_scan / stride);
   choose("lio.point_filter_num", lio.point_filter_num, stride, why_stride.str());
   // The noise model of the points: the datasheet's range noise, and a bearing noise of half the
   // beam divergence (the footprint's half width: where in it the echo comes from is unknown).
@@ -157,8 +146,29 @@ void apply_estimator_defaults(LivodConfig& config) {
   const int lidar = estimator_lidar_index(config);
   if (lidar < 0) return;
   const std::string& model = config.sensors[static_cast<std::size_t>(lidar)].model;
+  const estimator::EstimatorParams file_values = config.estimator;
   config.estimator_choices = estimator_settings_for(lidar_model_facts(model), model,
                                                     config.estimator_given, config.estimator);
+  // The other LiDARs: their own model's point model, not the estimator LiDAR's (a VLP-16's
+  // bearing noise on an Avia's points, or a VLP-16's every point on an OS1-128 beside it).
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    SensorConfig& s = config.sensors[i];
+    if (static_cast<int>(i) == lidar || !s.enabled || sensor_kind(s.driver) != SensorKind::lidar) {
+      continue;
+    }
+    const auto facts = lidar_model_facts(s.model);
+    if (!facts) continue;  // no facts: estimator.lio's values, as the file gives none
+    estimator::EstimatorParams own = file_values;
+    estimator_settings_for(facts, s.model, config.estimator_given, own);
+    const auto fill = [&](const char* key, auto& field, auto value) {
+      if (field || config.estimator_given.contains(std::string("lio.") + key)) return;
+      field = value;
+      s.lio_from_model.insert(key);
+    };
+    fill("dept_err", s.lio.dept_err, own.lio.dept_err);
+    fill("beam_err_deg", s.lio.beam_err_deg, own.lio.beam_err_deg);
+    fill("point_filter_num", s.lio.point_filter_num, own.lio.point_filter_num);
+  }
 }
 
 }  // namespace livod::daemon

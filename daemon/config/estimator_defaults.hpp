@@ -55,7 +55,11 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
 int estimator_lidar_index(const LivodConfig& config);
 
 // Applies estimator_settings_for() for the configuration's estimator LiDAR to config.estimator and
-// records the choices in config.estimator_choices.
+// records the choices in config.estimator_choices. With several LiDARs each other LiDAR's point
+// model (dept_err, beam_err_deg, point_filter_num) follows its own model the same way: set in its
+// `lio:` section, unless the file sets the key in its own lio: or in estimator.lio (then that
+// value holds for it, as without defaults). The point budget is one for the estimator: it counts
+// the points of every LiDAR in an update (docs/estimator.md "Several LiDARs").
 void apply_estimator_defaults(LivodConfig& config);
 
 // Per-scan points the update works on (lio.point_budget) and the raw points per scan the point

@@ -579,6 +579,9 @@ void read_lidar_lio(MapReader& m, estimator::LidarLioParams& lio) {
   if (m.read("dept_err", dept_err, left_open(0.0, 1.0))) lio.dept_err = dept_err;
   double beam_err_deg = 0.0;
   if (m.read("beam_err_deg", beam_err_deg, left_open(0.0, 5.0))) lio.beam_err_deg = beam_err_deg;
+  int point_filter_num = 1;
+  if (m.read("point_filter_num", point_filter_num, 1, 1000))
+    lio.point_filter_num = point_filter_num;
   m.read("build_map", lio.build_map);
   m.finish();
 }

@@ -95,14 +95,22 @@ std::string summarize_config(const LivodConfig& config) {
       out << ", T_body_sensor " << describe_pose(s.T_body_sensor);
     }
     if (s.time_offset_s != 0.0) out << ", time offset " << s.time_offset_s << " s";
-    const bool own_lio = s.lio.dept_err || s.lio.beam_err_deg || !s.lio.build_map;
+    const bool own_lio =
+        s.lio.dept_err || s.lio.beam_err_deg || s.lio.point_filter_num || !s.lio.build_map;
     if (sensor_kind(s.driver) == SensorKind::lidar && (enabled_lidars > 1 || own_lio)) {
-      // Each LiDAR's point model, and where it comes from (its own lio: or estimator.lio).
+      // Each LiDAR's point model, and where it comes from: its own lio:, its model's defaults or
+      // estimator.lio.
       const auto& lio = config.estimator.lio;
+      const auto from = [&](const char* key, bool own) -> std::string {
+        if (s.lio_from_model.contains(key)) return " (" + s.model + " default)";
+        return own ? "" : " (estimator.lio)";
+      };
       out << ", point noise: range " << s.lio.dept_err.value_or(lio.dept_err) << " m"
-          << (s.lio.dept_err ? "" : " (estimator.lio)") << ", bearing "
+          << from("dept_err", s.lio.dept_err.has_value()) << ", bearing "
           << s.lio.beam_err_deg.value_or(lio.beam_err_deg) << " deg"
-          << (s.lio.beam_err_deg ? "" : " (estimator.lio)")
+          << from("beam_err_deg", s.lio.beam_err_deg.has_value()) << ", one point in "
+          << s.lio.point_filter_num.value_or(lio.point_filter_num)
+          << from("point_filter_num", s.lio.point_filter_num.has_value())
           << (s.lio.build_map ? ", builds the map" : ", matched only (does not build the map)");
     }
     out << '\n';

@@ -54,7 +54,7 @@ TEST(EstimatorDefaults, EveryModelOfTheFamilyTablesHasItsFacts) {
   EXPECT_FALSE(lidar_model_facts("OS"));
 }
 
-// The Hesai PandarXT-32 (640 k points/s): every 2nd point of each ring, its datasheet's 1 cm, and
+// The Hesai PandarXT-32 (640 k points/s): one point in 2, its datasheet's 1 cm, and
 // a divergence its sources do not give, said so.
 TEST(EstimatorDefaults, HesaiGetsItsDefaultsFromItsFamilyTable) {
   const auto facts = lidar_model_facts("PandarXT-32");
@@ -78,7 +78,7 @@ TEST(EstimatorDefaults, HesaiGetsItsDefaultsFromItsFamilyTable) {
   EXPECT_TRUE(assumed);
 }
 
-// A 128-beam Ouster brings 131 k points per scan: every 4th point of each ring and the point
+// A 128-beam Ouster brings 131 k points per scan: one point in 4 and the point
 // budget keep a frame real-time; a 16-beam Velodyne keeps every point.
 TEST(EstimatorDefaults, PointSelectionFollowsThePointsPerScan) {
   const auto os128 = load(ouster_config("OS1-128"));

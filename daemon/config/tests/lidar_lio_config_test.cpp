@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "daemon/config/estimator_defaults.hpp"
 #include "daemon/config/load_config.hpp"
 #include "daemon/config/summary.hpp"
 #include "daemon/config/tests/config_test_support.hpp"
@@ -47,14 +48,52 @@ TEST(LidarLioConfig, UnsetValuesAreTheEstimatorsAndSetOnesAreRead) {
   EXPECT_TRUE(avia.lio.build_map);
   // The summary gives every LiDAR's effective values and where they come from.
   const std::string summary = summarize_config(result.config);
-  EXPECT_NE(summary.find("point noise: range 0.03 m, bearing 0.1 deg (estimator.lio), matched "
-                         "only (does not build the map)"),
+  EXPECT_NE(summary.find("point noise: range 0.03 m, bearing 0.1 deg (estimator.lio), one point "
+                         "in 1 (estimator.lio), matched only (does not build the map)"),
             std::string::npos)
       << summary;
   EXPECT_NE(summary.find("point noise: range 0.015 m (estimator.lio), bearing 0.1 deg "
-                         "(estimator.lio), builds the map"),
+                         "(estimator.lio), one point in 1 (AVIA default), builds the map"),
             std::string::npos)
       << summary;
+}
+
+// Without an estimator section every LiDAR's point model follows its own model: the Avia beside
+// the VLP-16 (the estimator's LiDAR) gets the Avia's noise, not the VLP-16's; a value in its own
+// lio: or in estimator.lio still wins.
+TEST(LidarLioConfig, EachLidarGetsItsOwnModelsDefaults) {
+  const auto facts_vlp16 = lidar_model_facts("VLP-16");
+  const auto facts_avia = lidar_model_facts("AVIA");
+  ASSERT_TRUE(facts_vlp16 && facts_avia);
+  estimator::EstimatorParams vlp16_params;
+  estimator_settings_for(facts_vlp16, "VLP-16", {}, vlp16_params);
+  estimator::EstimatorParams avia_params;
+  estimator_settings_for(facts_avia, "AVIA", {}, avia_params);
+  ASSERT_NE(vlp16_params.lio.beam_err_deg, avia_params.lio.beam_err_deg);  // else no test
+
+  const auto plain = load(two_lidars(""));
+  ASSERT_TRUE(plain.problems.empty()) << dump(plain);
+  const SensorConfig& vlp16 = plain.config.sensors.at(0);
+  const SensorConfig& avia = plain.config.sensors.at(1);
+  EXPECT_DOUBLE_EQ(plain.config.estimator.lio.beam_err_deg, vlp16_params.lio.beam_err_deg);
+  EXPECT_FALSE(vlp16.lio.beam_err_deg.has_value());  // the estimator's LiDAR: estimator.lio
+  ASSERT_TRUE(avia.lio.beam_err_deg && avia.lio.dept_err && avia.lio.point_filter_num);
+  EXPECT_DOUBLE_EQ(*avia.lio.beam_err_deg, avia_params.lio.beam_err_deg);
+  EXPECT_DOUBLE_EQ(*avia.lio.dept_err, avia_params.lio.dept_err);
+  EXPECT_EQ(*avia.lio.point_filter_num, avia_params.lio.point_filter_num);
+  EXPECT_NE(summarize_config(plain.config).find("(AVIA default)"), std::string::npos)
+      << summarize_config(plain.config);
+
+  // Its own lio: wins for that key; estimator.lio wins over the model for every LiDAR.
+  const auto set = load(
+      two_lidars("", "    lio: {beam_err_deg: 0.3}\n", "", "estimator: {lio: {dept_err: 0.04}}\n"));
+  ASSERT_TRUE(set.problems.empty()) << dump(set);
+  const SensorConfig& avia2 = set.config.sensors.at(1);
+  EXPECT_DOUBLE_EQ(*avia2.lio.beam_err_deg, 0.3);
+  EXPECT_FALSE(avia2.lio.dept_err.has_value());  // estimator.lio's 0.04
+  EXPECT_FALSE(avia2.lio_from_model.contains("beam_err_deg"));
+  EXPECT_FALSE(avia2.lio_from_model.contains("dept_err"));
+  EXPECT_TRUE(avia2.lio_from_model.contains("point_filter_num"));
 }
 
 TEST(LidarLioConfig, EveryProblemIsListed) {
