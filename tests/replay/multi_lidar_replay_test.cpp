@@ -109,24 +109,49 @@ TEST(MultiLidarReplay, Vlp16PlusAviaStreetBeatsBothLidarsAlone) {
 }
 
 // The corridor with side rooms: the forward Avia sees uniform walls, floor and ceiling, and faces
-// along x only as slivers through the doorways; the Avia looking left sees into the rooms. With
-// it, half as many frames are degenerate (measured, 16 s: 11 % against 23 %). The trajectory is
-// not more accurate on this seed (ATE 6.6 mm against 6.2 mm) and over seeds it goes either way
-// (seeds 1-5: pair 6.6, 4.7, 10.3, 6.4, 7.8 mm; forward alone 6.2, 7.4, 5.9, 7.9, 12.6 mm): the
-// slivers keep the forward LiDAR alone from drifting much, so the check on accuracy is that the
-// pair stays comparable.
+// along x only as slivers through the doorways; the Avia looking left sees into the rooms.
+// Re-derived for the per-model defaults (issue 15) over seeds 1-3 instead of seed 1 alone: with
+// the Avia's default bearing noise (0.14 deg, half its divergence; FAST-LIVO2's 0.05 deg before)
+// the forward Avia alone on seed 1 is flagged degenerate on 3 % of frames only (23 % with
+// 0.05 deg, same capture and build), while on seeds 2 and 3 it still is on 21-22 % - one seed no
+// longer shows the corridor's degeneracy. Pooled over the three seeds (measured: forward alone 72
+// of 474 frames, 15 %; the pair 53 of 945, 5.6 %) the sideways LiDAR more than halves the share
+// of degenerate frames, which is what issue 10 asks. The ATE goes either way per seed (pair 8.3,
+// 9.4, 7.8 mm; forward alone 6.2, 6.4, 11.0 mm), as it did before the defaults (docs/estimator.md
+// "Several LiDARs"): the check on accuracy is that the pair's mean stays comparable.
 TEST(MultiLidarReplay, SidewaysLidarConstrainsTheCorridor) {
   const sim::Scenario scenario = sim::make_scenario("corridor_side_rooms_dual_avia");
   if (!test::scenario_runnable(scenario)) GTEST_SKIP() << "Avia not simulated";
-  const auto folder = test::simulate(scenario, 16.0, "corridor-dual-avia");
-  const LidarRun both = replay_with(folder, "corridor-dual-avia-both");
-  const LidarRun forward = replay_with(folder, "corridor-dual-avia-forward", {"side"});
-  const double both_share = static_cast<double>(both.degenerate) / static_cast<double>(both.frames);
+  std::uint64_t both_degenerate = 0;
+  std::uint64_t both_frames = 0;
+  std::uint64_t forward_degenerate = 0;
+  std::uint64_t forward_frames = 0;
+  double both_ate = 0.0;
+  double forward_ate = 0.0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    const std::string tag = "corridor-dual-avia-" + std::to_string(seed);
+    const auto folder = test::simulate(scenario, 16.0, tag, seed);
+    const LidarRun both = replay_with(folder, tag + "-both");
+    const LidarRun forward = replay_with(folder, tag + "-forward", {"side"});
+    both_degenerate += both.degenerate;
+    both_frames += both.frames;
+    forward_degenerate += forward.degenerate;
+    forward_frames += forward.frames;
+    both_ate += both.ate_m / 3.0;
+    forward_ate += forward.ate_m / 3.0;
+  }
+  ASSERT_GT(both_frames, 0u);
+  ASSERT_GT(forward_frames, 0u);
+  const double both_share = static_cast<double>(both_degenerate) / static_cast<double>(both_frames);
   const double forward_share =
-      static_cast<double>(forward.degenerate) / static_cast<double>(forward.frames);
-  EXPECT_GT(forward_share, 0.15);  // the forward LiDAR alone: degenerate in the plain stretches
+      static_cast<double>(forward_degenerate) / static_cast<double>(forward_frames);
+  std::printf(
+      "[multi-lidar] corridor seeds 1-3: degenerate %.1f %% (pair) against %.1f %% "
+      "(forward alone); mean ATE %.4f m against %.4f m\n",
+      100.0 * both_share, 100.0 * forward_share, both_ate, forward_ate);
+  EXPECT_GT(forward_share, 0.12);  // the forward LiDAR alone: degenerate in the plain stretches
   EXPECT_LT(both_share, 0.6 * forward_share);
-  EXPECT_LE(both.ate_m, 1.25 * forward.ate_m);
+  EXPECT_LE(both_ate, 1.25 * forward_ate);
 }
 
 }  // namespace
