@@ -28,6 +28,8 @@ PointNoise point_noise(const LioParams& lio, const LidarLioParams& own = {}) {
   n.range_sigma_m = own.dept_err.value_or(lio.dept_err);
   n.bearing_sigma_rad = own.beam_err_deg.value_or(lio.beam_err_deg) * M_PI / 180.0;
   n.max_incidence_rad = lio.max_incidence_deg * M_PI / 180.0;
+  n.range_limit_m = lio.range_limit_m;
+  n.sigma_at_limit_m = lio.dept_err_at_limit;
   return n;
 }
 
