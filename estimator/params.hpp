@@ -56,7 +56,7 @@ struct LioParams {
   double max_incidence_deg = 80.0;  // grazing hits are modelled as at this incidence
   // The range noise grows as the echo weakens (map/point_covariance.hpp): the detection limit of
   // a typical target seen head-on (m; 0: the range noise is dept_err at any range) and the range
-  // noise sigma at the limit (m). The daemon sets both per sensor model.
+  // noise sigma at the limit (m). Off by default (docs/estimator.md, "Known limits").
   double range_limit_m = 0.0;
   double dept_err_at_limit = 0.0;
   double min_eigen_value = 0.0025;  // planarity: smallest eigenvalue (m^2) below this
