@@ -54,6 +54,16 @@ struct LioParams {
   // r tan(incidence) beam_err): in association and in the plane fits. FAST-LIVO2 leaves it out.
   bool incidence_term = true;
   double max_incidence_deg = 80.0;  // grazing hits are modelled as at this incidence
+  // The range noise grows as the echo weakens (map/point_covariance.hpp): the detection limit of
+  // a typical target seen head-on (m; 0: the range noise is dept_err at any range) and the range
+  // noise sigma at the limit (m). Off by default (docs/estimator.md, "Known limits").
+  // Add the pose uncertainty at insertion to the map points' covariances (FAST-LIVO2, VoxelMap).
+  // The pose error is common to the whole scan, not independent per point; off, the street
+  // drive's pitch bias fell from -1.43 to -0.14 mrad (docs/estimator.md, "Long drives": measured
+  // over 12 s only, so still on by default).
+  bool map_pose_covariance = true;
+  double range_limit_m = 0.0;
+  double dept_err_at_limit = 0.0;
   double min_eigen_value = 0.0025;  // planarity: smallest eigenvalue (m^2) below this
   double sigma_num = 3.0;           // association gate, in sigmas
   double voxel_size = 0.5;          // root voxel edge (m)

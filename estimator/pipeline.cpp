@@ -29,6 +29,8 @@ PointNoise point_noise(const LioParams& lio, const LidarLioParams& own = {}) {
   n.range_sigma_m = own.dept_err.value_or(lio.dept_err);
   n.bearing_sigma_rad = own.beam_err_deg.value_or(lio.beam_err_deg) * M_PI / 180.0;
   n.max_incidence_rad = lio.max_incidence_deg * M_PI / 180.0;
+  n.range_limit_m = lio.range_limit_m;
+  n.sigma_at_limit_m = lio.dept_err_at_limit;
   return n;
 }
 
@@ -443,7 +445,9 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   };
   if (!visual) estimate_final();
 
-  // Map insertion with world covariances (point + pose uncertainty, FAST-LIVO2 1.3).
+  // Map insertion with world covariances: the point's sensor noise, plus the pose uncertainty
+  // with lio.map_pose_covariance (FAST-LIVO2 1.3; docs/estimator.md "Long drives": it tilts the
+  // map, -1.4 mrad of pitch on a street drive).
   t0 = std::chrono::steady_clock::now();
   const Eigen::Matrix3d R = belief_.x.R_world_imu;
   Eigen::Matrix3d R_wl[kMaxLidars];
@@ -451,6 +455,7 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   const Eigen::Matrix3d P_rot = belief_.P.block<3, 3>(kRot, kRot);
   const Eigen::Matrix3d P_pos = belief_.P.block<3, 3>(kPos, kPos);
   const bool incidence = lio.incidence_term;
+  const bool pose_in_map = lio.map_pose_covariance;
   const bool matched = report.iterations > 0;  // the normals are from this scan's update
   const std::vector<Eigen::Vector3d>* normals = &p2p_->matched_normals();
   world_points_.resize(scan_points_.size());
@@ -467,8 +472,8 @@ void LioPipeline::process_group(const MeasurementGroup& group,
                                  Eigen::Vector3d(R_wl[l].transpose() * (*normals)[i]))
               : scan_points_[i].cov_lidar;
       world_points_[i].p = R * p_i + belief_.x.p_world_imu;
-      world_points_[i].cov =
-          R_wl[l] * cov_l * R_wl[l].transpose() + J_rot * P_rot * J_rot.transpose() + P_pos;
+      world_points_[i].cov = R_wl[l] * cov_l * R_wl[l].transpose();
+      if (pose_in_map) world_points_[i].cov += J_rot * P_rot * J_rot.transpose() + P_pos;
     }
   });
   if (builds_map_all_) {

@@ -83,14 +83,21 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
     PointQuery q;
     q.p = R * p_i + x.p_world_imu;
     q.cov = R_wl[l] * points[i].cov_lidar * R_wl[l].transpose();
-    if (incidence_) {
+    const PointNoise& own = noise_[l];  // the point's own LiDAR's
+    const bool growth = own.range_limit_m > 0.0 && own.sigma_at_limit_m > 0.0;
+    if (incidence_ || growth) {
       // The ray from the point's own LiDAR.
       const double r = p_l.norm();
       if (r > 0.0) {
         q.ray = R_wl[l] * (p_l / r);
-        const double sigma_b = noise_[l].bearing_sigma_rad;  // the point's own LiDAR's
-        q.incidence_var = r * r * sigma_b * sigma_b;
         q.max_tan2 = max_tan2[l];
+        if (incidence_) {
+          q.incidence_var = r * r * own.bearing_sigma_rad * own.bearing_sigma_rad;
+        }
+        if (growth) {
+          q.range_q2 = (r / own.range_limit_m) * (r / own.range_limit_m);
+          q.var_at_limit = own.sigma_at_limit_m * own.sigma_at_limit_m;
+        }
       }
     }
     normals_[i].setZero();

@@ -125,13 +125,24 @@ MapPlane map_plane(const Plane& plane) {
 }
 
 double incidence_variance(const PointQuery& q, const Eigen::Vector3d& normal) {
-  if (q.incidence_var <= 0.0) return 0.0;
+  if (q.incidence_var <= 0.0 && q.range_q2 <= 0.0) return 0.0;
   const double c = normal.dot(q.ray);
   const double cos2 = c * c;
-  // tan^2(alpha) cos^2(alpha) = sin^2(alpha) = 1 - cos^2; beyond the largest incidence,
-  // tan^2(max) cos^2(alpha).
-  const double tan2 = cos2 > 0.0 ? (1.0 - cos2) / cos2 : q.max_tan2;
-  return q.incidence_var * std::min(tan2, q.max_tan2) * cos2;
+  double variance = 0.0;
+  if (q.incidence_var > 0.0) {
+    // tan^2(alpha) cos^2(alpha) = sin^2(alpha) = 1 - cos^2; beyond the largest incidence,
+    // tan^2(max) cos^2(alpha).
+    const double tan2 = cos2 > 0.0 ? (1.0 - cos2) / cos2 : q.max_tan2;
+    variance += q.incidence_var * std::min(tan2, q.max_tan2) * cos2;
+  }
+  if (q.range_q2 > 0.0) {
+    // q^2 = (r / limit)^2 / cos(alpha), capped at 1 (range_growth_variance).
+    const double cos_eff = std::sqrt(std::max(cos2, 1.0 / (1.0 + q.max_tan2)));
+    const double head_on = std::pow(std::min(1.0, q.range_q2), 1.2);
+    const double here = std::pow(std::min(1.0, q.range_q2 / cos_eff), 1.2);
+    variance += q.var_at_limit * (here - head_on) * cos2;
+  }
+  return variance;
 }
 
 PlaneResidual plane_residual(const MapPlane& plane, const PointQuery& q) {

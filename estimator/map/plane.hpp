@@ -75,9 +75,15 @@ struct PointQuery {
   Eigen::Vector3d ray = Eigen::Vector3d::Zero();  // unit, sensor to point; zero: no incidence term
   double incidence_var = 0.0;                     // (r sigma_b)^2
   double max_tan2 = 0.0;  // tan^2 of the largest incidence modelled (grazing hits are clamped)
+  // The range noise growing towards the detection limit (point_covariance.hpp): (r / limit)^2
+  // (0: no growth) and the variance at the limit. `cov` holds its head-on value; the rest, which
+  // depends on the plane's incidence, is added per candidate plane.
+  double range_q2 = 0.0;
+  double var_at_limit = 0.0;
 };
-// The incidence term's variance along `normal`: (r sigma_b tan(alpha))^2 cos^2(alpha), alpha
-// clamped to the largest incidence.
+// The incidence-dependent variance along `normal`: (r sigma_b tan(alpha))^2 cos^2(alpha), and the
+// range noise growth beyond its head-on value, times cos^2(alpha); alpha clamped to the largest
+// incidence.
 double incidence_variance(const PointQuery& q, const Eigen::Vector3d& normal);
 // Residual of q: plane uncertainty + n^T cov n + the incidence term.
 PlaneResidual plane_residual(const MapPlane& plane, const PointQuery& q);

@@ -154,6 +154,65 @@ TEST(PointCovariance, IncidenceTermAlongAPlaneNormalMatchesTheFullCovariance) {
   }
 }
 
+TEST(PointCovariance, RangeNoiseGrowthAlongAPlaneNormalMatchesTheFullCovariance) {
+  // The range noise growing towards the detection limit depends on the incidence as well: the
+  // query holds its head-on value and adds the rest per candidate plane. With and without the
+  // incidence term, at ranges from well inside to beyond the limit.
+  std::mt19937 rng(9);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (const bool incidence : {false, true}) {
+    PointNoise noise;
+    noise.range_sigma_m = 0.015;
+    noise.bearing_sigma_rad = 0.0015;
+    noise.range_limit_m = 30.0;
+    noise.sigma_at_limit_m = 0.1;
+    for (int trial = 0; trial < 300; ++trial) {
+      const Eigen::Vector3d p = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 15.0;
+      const Eigen::Vector3d n = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+      PointNoise own = noise;
+      if (!incidence) own.bearing_sigma_rad = 0.0;
+      const Eigen::Matrix3d full = point_covariance(p, own, n);
+      PointQuery q;
+      q.p = p;
+      q.cov = point_covariance(p, own);
+      q.ray = p.normalized();
+      q.incidence_var = p.squaredNorm() * own.bearing_sigma_rad * own.bearing_sigma_rad;
+      q.max_tan2 = std::pow(std::tan(own.max_incidence_rad), 2);
+      q.range_q2 = p.squaredNorm() / (noise.range_limit_m * noise.range_limit_m);
+      q.var_at_limit = noise.sigma_at_limit_m * noise.sigma_at_limit_m;
+      const double expected = n.dot(full * n);
+      EXPECT_NEAR(n.dot(q.cov * n) + incidence_variance(q, n), expected, 1e-12 + 1e-9 * expected)
+          << "trial " << trial << (incidence ? " with" : " without") << " the incidence term";
+    }
+  }
+}
+
+TEST(PointCovariance, RangeNoiseGrowsTowardsTheDetectionLimit) {
+  PointNoise noise;
+  noise.range_sigma_m = 0.015;
+  noise.bearing_sigma_rad = 0.0;
+  noise.range_limit_m = 40.0;
+  noise.sigma_at_limit_m = 0.1;
+  const auto range_sigma = [&](double r, double incidence_rad) {
+    const Eigen::Vector3d p(r, 0.0, 0.0);
+    const Eigen::Vector3d n(-std::cos(incidence_rad), std::sin(incidence_rad), 0.0);
+    return std::sqrt(point_covariance(p, noise, n)(0, 0));
+  };
+  // sigma = hypot(sigma_0, sigma_limit q^1.2), q = r / (limit sqrt(cos alpha)), capped at 1.
+  EXPECT_NEAR(range_sigma(40.0, 0.0), std::hypot(0.015, 0.1), 1e-12);
+  EXPECT_NEAR(range_sigma(20.0, 0.0), std::hypot(0.015, 0.1 * std::pow(0.5, 1.2)), 1e-12);
+  EXPECT_NEAR(range_sigma(20.0, M_PI / 3.0),
+              std::hypot(0.015, 0.1 * std::pow(0.5 / std::sqrt(0.5), 1.2)), 1e-12);
+  EXPECT_NEAR(range_sigma(80.0, 0.0), std::hypot(0.015, 0.1), 1e-12);  // capped at the limit
+  EXPECT_NEAR(range_sigma(1.0, 0.0), std::hypot(0.015, 0.1 * std::pow(1.0 / 40.0, 1.2)), 1e-12);
+  // Grazing hits are modelled at the largest incidence.
+  EXPECT_NEAR(range_growth_variance(10.0, 0.0, noise),
+              range_growth_variance(10.0, std::cos(noise.max_incidence_rad), noise), 1e-15);
+  // Off without a limit.
+  noise.range_limit_m = 0.0;
+  EXPECT_NEAR(range_sigma(40.0, 0.0), 0.015, 1e-12);
+}
+
 TEST(PointCovariance, RangeAlongTheRayBearingAcrossIt) {
   PointNoise noise;
   noise.range_sigma_m = 0.02;
