@@ -11,7 +11,8 @@
 # line naming the configured sensor, which is absent; the `livod` system user; /var/lib/livod and
 # /var/log/livod owned by it, mode 0750; the process runs as livod with no capability,
 # no_new_privs, a seccomp filter and RLIMIT_RTPRIO 50, and has SCHED_FIFO threads;
-# net.core.rmem_max from the sysctl.d drop-in; `systemd-analyze verify` prints nothing;
+# net.core.rmem_max from the sysctl.d drop-in and the capture socket's 8 MiB receive buffer (ss);
+# `systemd-analyze verify` prints nothing;
 # `systemd-analyze security livod` (the loaded unit) rates exposure <= MAX_EXPOSURE; no restart and
 # no withheld watchdog ping over LIVOD_VM_UP_S seconds without sensors; SIGUSR1 to the main
 # process is answered in the journal and the daemon runs on (no sensor, no scan: the answer is the
@@ -89,6 +90,9 @@ chroot "$root" dpkg-query -W -f '${Package}\n' | sort >"$work/packages-before.tx
 } >"$work/apt-install.log" 2>&1 || fail "apt-get install ./livod.deb: $work/apt-install.log"
 chroot "$root" dpkg-query -W -f '${Package}\n' | sort >"$work/packages-after.txt"
 rm "$root/tmp/livod.deb"
+# ss(8) for the guest's socket check: a test tool, installed after the package list was taken.
+DEBIAN_FRONTEND=noninteractive chroot "$root" apt-get install -y --no-install-recommends iproute2 \
+  >>"$work/apt-install.log" 2>&1 || fail "apt-get install iproute2: $work/apt-install.log"
 chroot "$root" apt-get clean
 added=$(comm -13 "$work/packages-before.txt" "$work/packages-after.txt" | wc -l)
 echo "apt-get install ./$(basename "$deb"): $added packages added (list: $work/packages-after.txt)"
