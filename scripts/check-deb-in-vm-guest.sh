@@ -69,7 +69,7 @@ fi
 # What the package installs besides the unit: the configuration livod accepts, the guide the
 # unit's Documentation= names, the LCM types for lcm-spy and Python.
 if out=$(livod check-config /etc/livod/livod.yaml 2>&1); then
-  pass "livod check-config /etc/livod/livod.yaml: $(tail -n 1 <<<"$out")"
+  pass "livod check-config /etc/livod/livod.yaml: $(head -n 1 <<<"$out")"
 else
   check_fail "livod check-config /etc/livod/livod.yaml: $(tr '\n' ' ' <<<"$out")"
 fi
