@@ -198,6 +198,28 @@ else
   check_fail "no 'SIGTERM: stopping' in the journal"
 fi
 
+# The service writes only where the unit lets it (ProtectSystem=strict): the administrator points
+# the outputs at StateDirectory and LogsDirectory (docs/deploy.md "Where things live"); at stop
+# they are written there, owned by livod, not readable by others (UMask=0027).
+cp /etc/livod/livod.yaml /root/livod.yaml.example
+sed -i -e 's|^  trajectory: null$|  trajectory: /var/lib/livod/trajectory.txt|' \
+  -e 's|^  map_pcd: null$|  map_pcd: /var/lib/livod/map.pcd\n  timing_report: /var/log/livod/timing.txt|' \
+  /etc/livod/livod.yaml
+if systemctl start livod.service && sleep 5 && systemctl stop livod.service &&
+  [[ $(prop Result) == success && $(prop ExecMainStatus) == 0 ]]; then
+  for f in /var/lib/livod/trajectory.txt /var/lib/livod/map.pcd /var/log/livod/timing.txt; do
+    mode=$(stat -c '%U:%G %a' "$f" 2>/dev/null)
+    if [[ $mode == "livod:livod 640" ]]; then
+      pass "output written at stop: $f $mode"
+    else
+      check_fail "output $f: '${mode:-missing}', expected livod:livod 640"
+    fi
+  done
+else
+  check_fail "restart with outputs: $(systemctl show livod.service -p Result,ExecMainStatus | tr '\n' ' ')"
+fi
+cp /root/livod.yaml.example /etc/livod/livod.yaml
+
 say "--- journalctl -u livod (this boot) ---"
 journalctl -b -u livod.service -o short-monotonic --no-pager | sed 's/^/livod-vm: | /'
 if ((failed == 0)); then say "RESULT PASS"; else say "RESULT FAIL ($failed failed)"; fi

@@ -17,7 +17,8 @@
 # no withheld watchdog ping over LIVOD_VM_UP_S seconds without sensors; SIGUSR1 to the main
 # process is answered in the journal and the daemon runs on (no sensor, no scan: the answer is the
 # refusal to save an empty map); `systemctl stop` is clean (SIGTERM logged, exit 0, result
-# success).
+# success); with the outputs pointed at /var/lib/livod and /var/log/livod, a start and stop write
+# them there (livod:livod, 0640).
 #
 # Run by hand as root (minutes: debootstrap once, then qemu's software emulation; needs the Debian
 # mirror): too slow and privileged for every CI run.
