@@ -79,13 +79,19 @@ for f in /usr/share/doc/livod/deploy.md /usr/share/java/livod_lcmtypes.jar \
   if [[ -s $f ]]; then pass "installed: $f"; else check_fail "not installed: $f"; fi
 done
 
-for dir in /var/lib/livod /var/log/livod; do
-  owner=$(stat -c '%U:%G %a' "$dir" 2>/dev/null)
-  if [[ $owner == "livod:livod 750" ]]; then
-    pass "$dir $owner"
+# expect_owner_mode PATH "USER:GROUP MODE" WHAT
+expect_owner_mode() {
+  local got
+  got=$(stat -c '%U:%G %a' "$1" 2>/dev/null)
+  if [[ $got == "$2" ]]; then
+    pass "$3$1 $got"
   else
-    check_fail "$dir: '${owner:-missing}', expected livod:livod 750"
+    check_fail "$3$1: '${got:-missing}', expected $2"
   fi
+}
+
+for dir in /var/lib/livod /var/log/livod; do
+  expect_owner_mode "$dir" "livod:livod 750" ""
 done
 
 # The process as the unit made it: user livod, no capability, no_new_privs, seccomp filter.
@@ -208,12 +214,7 @@ sed -i -e 's|^  trajectory: null$|  trajectory: /var/lib/livod/trajectory.txt|' 
 if systemctl start livod.service && sleep 5 && systemctl stop livod.service &&
   [[ $(prop Result) == success && $(prop ExecMainStatus) == 0 ]]; then
   for f in /var/lib/livod/trajectory.txt /var/lib/livod/map.pcd /var/log/livod/timing.txt; do
-    mode=$(stat -c '%U:%G %a' "$f" 2>/dev/null)
-    if [[ $mode == "livod:livod 640" ]]; then
-      pass "output written at stop: $f $mode"
-    else
-      check_fail "output $f: '${mode:-missing}', expected livod:livod 640"
-    fi
+    expect_owner_mode "$f" "livod:livod 640" "output written at stop: "
   done
 else
   check_fail "restart with outputs: $(systemctl show livod.service -p Result,ExecMainStatus | tr '\n' ' ')"
