@@ -58,9 +58,9 @@ struct LioParams {
   // a typical target seen head-on (m; 0: the range noise is dept_err at any range) and the range
   // noise sigma at the limit (m). Off by default (docs/estimator.md, "Known limits").
   // Add the pose uncertainty at insertion to the map points' covariances (FAST-LIVO2, VoxelMap).
-  // The pose error is common to the whole scan, not independent per point; off, the street
-  // drive's pitch bias fell from -1.43 to -0.14 mrad, but the VLP-16 street fails without it
-  // (docs/estimator.md, "Long drives"), so it stays on by default.
+  // The pose error is common to the whole scan, not independent per point: off, a street drive's
+  // pitch bias fell from -1.43 to -0.14 mrad, but sparse-ring streets lose track (estimator.md
+  // "Long drives"). On here (FAST-LIVO2); the daemon chooses per model (estimator_defaults.hpp).
   bool map_pose_covariance = true;
   double range_limit_m = 0.0;
   double dept_err_at_limit = 0.0;

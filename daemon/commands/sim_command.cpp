@@ -9,6 +9,7 @@
 
 #include "daemon/commands/command.hpp"
 #include "tools/sim/lidar_registry.hpp"
+#include "tools/sim/plain_scenario.hpp"
 #include "tools/sim/runner.hpp"
 #include "tools/sim/scenario.hpp"
 
@@ -88,9 +89,8 @@ void add_sim_command(CLI::App& app, CommandContext& ctx) {
                                                     : sim::make_scenario(opts->scenario);
     for (auto& lidar : scenario.lidars) {
       if (opts->scan_rate_hz > 0.0) lidar.scan_rate_hz = opts->scan_rate_hz;
-      if (opts->plain) lidar.range = sim::plain_range_model(lidar.range);
     }
-    if (opts->plain) scenario.scene = sim::SceneContent{};
+    if (opts->plain) sim::make_plain(scenario);
     sim::SimRunOptions run;
     run.out_dir = opts->out;
     run.seed = opts->seed;

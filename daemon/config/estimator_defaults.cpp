@@ -45,6 +45,10 @@ std::optional<LidarModelFacts> lidar_model_facts(std::string_view model) {
   LidarModelFacts f;
   f.model = std::string(info.name);
   f.beams = info.beams;
+  // A spinning LiDAR's scans can be cut at an azimuth or by its own frame counter; Livox's
+  // rosette only by time.
+  f.spinning = match->family->allows(drivers::CutMode::kAzimuth) ||
+               match->family->allows(drivers::CutMode::kFrameId);
   f.scan_rate_hz = info.scan_rate_hz;
   f.points_per_scan = info.points_per_second / info.scan_rate_hz;
   f.source = std::string(match->family->vendor) + " datasheet, livod's " +
@@ -108,6 +112,11 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
                        given.contains("lio.beam_err_deg")
                            ? "set in the configuration"
                            : name + " has no model facts: FAST-LIVO2's bearing noise"});
+    choices.push_back({"lio.map_pose_covariance", lio.map_pose_covariance ? "true" : "false",
+                       given.contains("lio.map_pose_covariance")
+                           ? "set in the configuration"
+                           : name + " has no model facts: FAST-LIVO2's (map points carry the "
+                                    "pose uncertainty)"});
     return choices;
   }
   // Undistortion and downsampling cost per raw point: keep one point in n (alike in every ring,
@@ -130,6 +139,26 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
              (facts->divergence_assumed
                   ? " (not in livod's sources for " + name + ": a spinning LiDAR's 3 mrad assumed)"
                   : std::string()));
+  // The pose uncertainty at insertion is common to a scan; added to each map point it weights
+  // far planes less, which tilts a long drive (docs/estimator.md "Long drives") but is what keeps
+  // a sparse spinning LiDAR's street on track (its rings cut voxels in single-ring lines).
+  const bool sparse_rings = facts->spinning && facts->beams > 0 && facts->beams < kDenseRings;
+  if (given.contains("lio.map_pose_covariance")) {
+    choices.push_back({"lio.map_pose_covariance", lio.map_pose_covariance ? "true" : "false",
+                       "set in the configuration"});
+  } else {
+    lio.map_pose_covariance = sparse_rings;
+    choices.push_back(
+        {"lio.map_pose_covariance", sparse_rings ? "true" : "false",
+         sparse_rings ? name + "'s " + std::to_string(facts->beams) +
+                            " rings: map points carry the pose uncertainty (a street drive "
+                            "without it loses track)"
+                      : name +
+                            (facts->spinning ? " has " + std::to_string(facts->beams) + " rings"
+                                             : std::string(" scans a dense rosette")) +
+                            ": map points carry their sensor noise only (the pose term tilts "
+                            "long drives)"});
+  }
   return choices;
 }
 

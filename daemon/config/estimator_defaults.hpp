@@ -31,6 +31,7 @@ struct LidarModelFacts {
   double range_sigma_m = 0.0;       // range noise, 1 sigma, of a strong return
   double divergence_deg = 0.0;      // beam divergence (FWHM) of the wider axis
   bool divergence_assumed = false;  // no source gives it: kAssumedDivergenceDeg
+  bool spinning = false;            // rings at fixed elevations (not Livox's rosette)
   std::string source;               // where the figures come from
 };
 
@@ -67,5 +68,8 @@ void apply_estimator_defaults(LivodConfig& config);
 // target on the reference machine (docs/estimator.md, "Defaults per sensor").
 inline constexpr int kDefaultPointBudget = 8000;
 inline constexpr double kRawPointsPerScan = 35000.0;
+// Spinning LiDARs with fewer rings than this insert their map points with the pose uncertainty
+// (lio.map_pose_covariance): measured, docs/estimator.md "Long drives".
+inline constexpr int kDenseRings = 64;
 
 }  // namespace livod::daemon

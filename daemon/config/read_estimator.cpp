@@ -42,7 +42,7 @@ void read_lio(MapReader& m, estimator::LioParams& lio, std::set<std::string>& gi
   note(m.read("dept_err", lio.dept_err, left_open(0.0, 1.0)), "dept_err");
   note(m.read("beam_err_deg", lio.beam_err_deg, left_open(0.0, 5.0)), "beam_err_deg");
   m.read("incidence_term", lio.incidence_term);
-  m.read("map_pose_covariance", lio.map_pose_covariance);
+  note(m.read("map_pose_covariance", lio.map_pose_covariance), "map_pose_covariance");
   m.read("max_incidence_deg", lio.max_incidence_deg, closed(0.0, 89.0));
   note(m.read("range_limit_m", lio.range_limit_m, closed(0.0, 10000.0)), "range_limit_m");
   note(m.read("dept_err_at_limit", lio.dept_err_at_limit, closed(0.0, 1.0)), "dept_err_at_limit");

@@ -130,6 +130,22 @@ TEST(Plane, MapFormGivesTheFullCovarianceVariance) {
   }
 }
 
+// The query of a point at p (sensor at the origin) as the LIO update builds it: the head-on
+// covariance, and what the incidence term and the range noise growth add per candidate plane.
+PointQuery query_at(const Eigen::Vector3d& p, const PointNoise& noise) {
+  PointQuery q;
+  q.p = p;
+  q.cov = point_covariance(p, noise);
+  q.ray = p.normalized();
+  q.incidence_var = p.squaredNorm() * noise.bearing_sigma_rad * noise.bearing_sigma_rad;
+  q.max_tan2 = std::pow(std::tan(noise.max_incidence_rad), 2);
+  if (noise.range_limit_m > 0.0) {
+    q.range_q2 = p.squaredNorm() / (noise.range_limit_m * noise.range_limit_m);
+    q.var_at_limit = noise.sigma_at_limit_m * noise.sigma_at_limit_m;
+  }
+  return q;
+}
+
 TEST(PointCovariance, IncidenceTermAlongAPlaneNormalMatchesTheFullCovariance) {
   // Association adds the incidence term per candidate plane (PointQuery); map insertion builds
   // the full covariance with the surface normal. Both must give the same variance along n.
@@ -142,12 +158,7 @@ TEST(PointCovariance, IncidenceTermAlongAPlaneNormalMatchesTheFullCovariance) {
     const Eigen::Vector3d p = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 8.0;
     const Eigen::Vector3d n = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
     const Eigen::Matrix3d full = point_covariance(p, noise, n);
-    PointQuery q;
-    q.p = p;
-    q.cov = point_covariance(p, noise);
-    q.ray = p.normalized();
-    q.incidence_var = p.squaredNorm() * noise.bearing_sigma_rad * noise.bearing_sigma_rad;
-    q.max_tan2 = std::pow(std::tan(noise.max_incidence_rad), 2);
+    const PointQuery q = query_at(p, noise);
     const double expected = n.dot(full * n);
     EXPECT_NEAR(n.dot(q.cov * n) + incidence_variance(q, n), expected, 1e-12 + 1e-9 * expected)
         << "trial " << trial;
@@ -172,14 +183,7 @@ TEST(PointCovariance, RangeNoiseGrowthAlongAPlaneNormalMatchesTheFullCovariance)
       PointNoise own = noise;
       if (!incidence) own.bearing_sigma_rad = 0.0;
       const Eigen::Matrix3d full = point_covariance(p, own, n);
-      PointQuery q;
-      q.p = p;
-      q.cov = point_covariance(p, own);
-      q.ray = p.normalized();
-      q.incidence_var = p.squaredNorm() * own.bearing_sigma_rad * own.bearing_sigma_rad;
-      q.max_tan2 = std::pow(std::tan(own.max_incidence_rad), 2);
-      q.range_q2 = p.squaredNorm() / (noise.range_limit_m * noise.range_limit_m);
-      q.var_at_limit = noise.sigma_at_limit_m * noise.sigma_at_limit_m;
+      const PointQuery q = query_at(p, own);
       const double expected = n.dot(full * n);
       EXPECT_NEAR(n.dot(q.cov * n) + incidence_variance(q, n), expected, 1e-12 + 1e-9 * expected)
           << "trial " << trial << (incidence ? " with" : " without") << " the incidence term";

@@ -4,7 +4,8 @@
 // would (mid-exposure stamps), and the same measurements feed two pipelines - one without a camera
 // (LIO) and one with it (LIVO). Sensor clocks are ideal (mapped = sensor time = scenario time);
 // clock mapping has its own tests. Both trajectories are evaluated against the ground truth as
-// `livod eval` does (SE(3) alignment).
+// `livod eval` does (SE(3) alignment). The estimator runs with the LiDAR model's defaults, as the
+// daemon sets them for a configuration without an `estimator:` section.
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "daemon/config/estimator_defaults.hpp"
 #include "drivers/livox/livox_decoder.hpp"
 #include "drivers/ouster/ouster_factory.hpp"
 #include "estimator/pipeline.hpp"
@@ -115,6 +117,9 @@ inline LivoSimRun run_livo_sim(const sim::Scenario& scenario, const LivoSimOptio
 
   estimator::PipelineOptions po;
   po.T_imu_lidar = mount.T_body_sensor;  // body = the LiDAR's internal IMU in these scenarios
+  // The estimator as the daemon configures this model without an `estimator:` section.
+  daemon::estimator_settings_for(daemon::lidar_model_facts(mount.model), mount.model, {},
+                                 po.params);
   if (mount.model.rfind("OS", 0) != 0) po.params.lio.blind = 0.3;
   if (options.tune) options.tune(po.params);
   std::unique_ptr<estimator::LioPipeline> lio;

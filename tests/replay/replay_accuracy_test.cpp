@@ -18,6 +18,7 @@
 #include <fstream>
 
 #include "tests/replay/sim_replay.hpp"
+#include "tools/sim/plain_scenario.hpp"
 
 namespace livod {
 namespace {
@@ -48,10 +49,7 @@ class ReplayAccuracy : public ::testing::TestWithParam<AccuracyCase> {};
 TEST_P(ReplayAccuracy, MeetsTheIssueTargets) {
   const AccuracyCase& c = GetParam();
   sim::Scenario scenario = sim::make_scenario(c.scenario);
-  if (c.plain) {
-    for (auto& lidar : scenario.lidars) lidar.range = sim::plain_range_model(lidar.range);
-    scenario.scene = sim::SceneContent{};
-  }
+  if (c.plain) sim::make_plain(scenario);
   if (!test::scenario_runnable(scenario)) {
     GTEST_SKIP() << c.scenario << ": LiDAR model " << scenario.lidars.front().model
                  << " is not simulated yet";

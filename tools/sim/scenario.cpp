@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "tools/sim/plain_scenario.hpp"
 
 namespace livod::sim {
 namespace {
@@ -208,6 +209,11 @@ RangeModel plain_range_model(const RangeModel& range) {
   r.max_range_m = range.max_range_m;
   r.reflectivity_gain = range.reflectivity_gain;
   return r;
+}
+
+void make_plain(Scenario& scenario) {
+  for (auto& lidar : scenario.lidars) lidar.range = plain_range_model(lidar.range);
+  scenario.scene = SceneContent{};
 }
 
 namespace {

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "daemon/config/summary.hpp"
 #include "daemon/config/tests/config_test_support.hpp"
 
@@ -101,7 +103,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   const auto r = load(ouster_config(
       "OS1-128",
       "{lio: {point_filter_num: 1, point_budget: 0, dept_err: 0.03, beam_err_deg: 0.2, "
-      "filter_size_surf: 0.3}}"));
+      "filter_size_surf: 0.3, map_pose_covariance: true}}"));
   ASSERT_TRUE(r.ok()) << dump(r);
   const auto& lio = r.config.estimator.lio;
   EXPECT_EQ(lio.point_filter_num, 1);
@@ -109,6 +111,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   EXPECT_DOUBLE_EQ(lio.dept_err, 0.03);
   EXPECT_DOUBLE_EQ(lio.beam_err_deg, 0.2);
   EXPECT_DOUBLE_EQ(lio.filter_size_surf, 0.3);
+  EXPECT_TRUE(lio.map_pose_covariance);
   for (const auto& c : r.config.estimator_choices) {
     EXPECT_EQ(c.reason, "set in the configuration") << c.key;
   }
@@ -117,6 +120,37 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   ASSERT_TRUE(one.ok()) << dump(one);
   EXPECT_DOUBLE_EQ(one.config.estimator.lio.dept_err, 0.03);
   EXPECT_EQ(one.config.estimator.lio.point_filter_num, 4);
+}
+
+// The pose uncertainty goes into the map points of spinning LiDARs with sparse rings only
+// (docs/estimator.md "Long drives": the 16- and 32-ring streets lose track without it, the
+// 64-ring drive tilts with it, Livox rooms are as good or better without it).
+TEST(EstimatorDefaults, MapPoseCovarianceFollowsTheRings) {
+  const auto pose_term = [](const char* model) {
+    estimator::EstimatorParams params;
+    params.lio.map_pose_covariance = !params.lio.map_pose_covariance;  // must be overwritten
+    const auto facts = lidar_model_facts(model);
+    EXPECT_TRUE(facts.has_value()) << model;
+    const auto choices = estimator_settings_for(facts, model, {}, params);
+    const auto c = std::find_if(choices.begin(), choices.end(),
+                                [](const auto& e) { return e.key == "lio.map_pose_covariance"; });
+    EXPECT_NE(c, choices.end()) << model;
+    if (c != choices.end()) {
+      EXPECT_EQ(c->value, params.lio.map_pose_covariance ? "true" : "false");
+    }
+    return params.lio.map_pose_covariance;
+  };
+  EXPECT_TRUE(pose_term("VLP-16"));
+  EXPECT_TRUE(pose_term("HDL-32E"));
+  EXPECT_TRUE(pose_term("PANDARXT32"));
+  EXPECT_FALSE(pose_term("OS1-64"));
+  EXPECT_FALSE(pose_term("OS1-128"));
+  EXPECT_FALSE(pose_term("AVIA"));
+  EXPECT_FALSE(pose_term("MID-360"));
+  // The file's value wins.
+  const auto set = load(ouster_config("OS1-64", "{lio: {map_pose_covariance: true}}"));
+  ASSERT_TRUE(set.ok()) << dump(set);
+  EXPECT_TRUE(set.config.estimator.lio.map_pose_covariance);
 }
 
 TEST(EstimatorDefaults, UnknownModelGetsTheBudgetAndSaysWhy) {
