@@ -142,7 +142,7 @@ using test::real_poses;
 // `max_dp_m`: how far a live pose may be from the replay's. The live path maps the sensor clock
 // from real arrival times and the scheduler sees the streams interleave as they arrive, so the
 // estimator meets the same data with slightly different timing; a handheld room stays within
-// 0.1 mm, the 10 m/s realistic street (moving objects, foliage) amplifies it to 0.25-1.4 mm over
+// 0.1 mm, the 10 m/s realistic street (moving objects, foliage) amplifies it to 0.25-1.7 mm over
 // runs, more under load (issue 15's realistic scenes; 1 mm held on the plain ones).
 void live_matches_replay(const std::string& scenario_name, double duration_s,
                          double max_dp_m = 1e-3) {

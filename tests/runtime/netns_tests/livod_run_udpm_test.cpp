@@ -135,6 +135,9 @@ std::vector<test::UdpRoute> same_ports(const std::filesystem::path& pcap) {
 struct Rig {
   const char* scenario;
   double imu_rate_hz;  // the LiDAR's internal IMU
+  // How far a live pose may be from the replay's: the realistic 10 m/s street amplifies the live
+  // path's timing differences to 0.25-1.7 mm (daemon_live_test.cpp, live_matches_replay).
+  double max_dp_m = 1e-3;
 };
 
 class LivodRunProcess : public testing::TestWithParam<Rig> {};
@@ -193,7 +196,7 @@ TEST_P(LivodRunProcess, BroadcastsOverUdpmThePosesReplayComputes) {
   EXPECT_EQ(n + dropped, replayed.summary.frames);
   const test::PoseComparison c = test::compare_with_replay(r.poses, trajectory);
   EXPECT_GE(c.matched + 1, n);
-  EXPECT_LE(c.max_position_m, 1e-3);
+  EXPECT_LE(c.max_position_m, GetParam().max_dp_m);
   EXPECT_LE(c.max_rotation_deg, 0.05);
   std::printf(
       "[run] %zu poses over udpm (replay %zu, dropped %zu), max |dp| %.3f mm, |dR| %.4f deg\n", n,
@@ -215,7 +218,7 @@ TEST_P(LivodRunProcess, BroadcastsOverUdpmThePosesReplayComputes) {
 
 INSTANTIATE_TEST_SUITE_P(EachFamily, LivodRunProcess,
                          testing::Values(Rig{"room_handheld_os1_64", 100.0},
-                                         Rig{"street_vehicle_hdl32e", 200.0},
+                                         Rig{"street_vehicle_hdl32e", 200.0, 2e-3},
                                          Rig{"room_handheld_mid360", 200.0}),
                          [](const testing::TestParamInfo<Rig>& rig) {
                            return std::string(rig.param.scenario);
