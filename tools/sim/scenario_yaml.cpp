@@ -144,11 +144,11 @@ Scenario load_scenario_yaml(const std::filesystem::path& file) {
   }
   Problems p;
   Scenario s;
-  check_keys(root,
-             {"base", "name", "description", "world", "street_length_m", "duration_s", "trajectory",
-              "lidars", "cameras", "body_imu", "groundtruth_rate_hz", "scene", "can_imu",
-              "serial_imu"},
-             "scenario", p);
+  check_keys(
+      root,
+      {"base", "name", "description", "world", "street_length_m", "duration_s", "trajectory",
+       "lidars", "cameras", "body_imu", "groundtruth_rate_hz", "scene", "can_imu", "serial_imu"},
+      "scenario", p);
   if (!root.IsMap()) throw Error(file.string() + ": a scenario file is a YAML mapping");
   if (const auto base = root["base"]) {
     try {
