@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <type_traits>
 
 #include "drivers/lidar_family.hpp"
 
@@ -82,14 +83,22 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
                                                     estimator::EstimatorParams& params) {
   auto& lio = params.lio;
   std::vector<EstimatorChoice> choices;
-  // A key of the file wins; anything else is set here and explained.
+  // A key of the file wins; anything else is set here and explained. Values as the file writes
+  // them.
+  const auto text = [](auto v) -> std::string {
+    if constexpr (std::is_same_v<decltype(v), bool>) {
+      return v ? "true" : "false";
+    } else {
+      return number(static_cast<double>(v));
+    }
+  };
   const auto choose = [&](const char* key, auto& field, auto value, const std::string& reason) {
     if (given.contains(key)) {
-      choices.push_back({key, number(static_cast<double>(field)), "set in the configuration"});
+      choices.push_back({key, text(field), "set in the configuration"});
       return;
     }
     field = value;
-    choices.push_back({key, number(static_cast<double>(field)), reason});
+    choices.push_back({key, text(field), reason});
   };
   const std::string name = model.empty() ? std::string("unknown model") : std::string(model);
 
@@ -143,22 +152,14 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
   // far planes less, which tilts a long drive (docs/estimator.md "Long drives") but is what keeps
   // a sparse spinning LiDAR's street on track (its rings cut voxels in single-ring lines).
   const bool sparse_rings = facts->spinning && facts->beams > 0 && facts->beams < kDenseRings;
-  if (given.contains("lio.map_pose_covariance")) {
-    choices.push_back({"lio.map_pose_covariance", lio.map_pose_covariance ? "true" : "false",
-                       "set in the configuration"});
-  } else {
-    lio.map_pose_covariance = sparse_rings;
-    choices.push_back(
-        {"lio.map_pose_covariance", sparse_rings ? "true" : "false",
-         sparse_rings ? name + "'s " + std::to_string(facts->beams) +
-                            " rings: map points carry the pose uncertainty (a street drive "
-                            "without it loses track)"
-                      : name +
-                            (facts->spinning ? " has " + std::to_string(facts->beams) + " rings"
-                                             : std::string(" scans a dense rosette")) +
+  const std::string rings = std::to_string(facts->beams) + " rings";
+  choose("lio.map_pose_covariance", lio.map_pose_covariance, sparse_rings,
+         sparse_rings ? name + "'s " + rings +
+                            ": map points carry the pose uncertainty (a street drive without it "
+                            "loses track)"
+                      : name + (facts->spinning ? " has " + rings : " scans a dense rosette") +
                             ": map points carry their sensor noise only (the pose term tilts "
-                            "long drives)"});
-  }
+                            "long drives)");
   return choices;
 }
 
