@@ -12,6 +12,7 @@
 #include <limits>
 #include <vector>
 
+#include "core/so3.hpp"
 #include "daemon/config/estimator_defaults.hpp"
 #include "daemon/replay/timing_report.hpp"
 #include "daemon/worker_pool.hpp"
@@ -40,6 +41,8 @@ struct DriveResult {
   double path_m = 0.0;  // ground-truth distance driven while the estimator ran
   double rmse_m = 0.0;  // position error over all frames, no alignment
   Eigen::Vector3d end_error = Eigen::Vector3d::Zero();  // at the last frame, per axis
+  // Attitude error at the last frame, world frame: Log(R_est R_true^T) (x roll, y pitch, rad).
+  Eigen::Vector3d end_rotation_error = Eigen::Vector3d::Zero();
   estimator::VoxelMapStats map;
 };
 
@@ -47,6 +50,9 @@ struct DriveOptions {
   double duration_s = 60.0;
   bool sliding = true;
   std::uint64_t seed = 11;
+  // Diagnostics of the drift (long_drive_open_test.cpp): an error-free IMU, ranges without noise.
+  bool ideal_imu = false;
+  bool noiseless_range = false;
 };
 
 inline DriveResult run_street_drive(const DriveOptions& options) {
@@ -63,6 +69,9 @@ inline DriveResult run_street_drive(const DriveOptions& options) {
   sim::SimLidarOptions sim_options;
   sim_options.range = sim::plain_range_model(mount.range);
   sim_options.imu_noise = mount.imu_noise;
+  if (options.ideal_imu)
+    sim_options.imu_noise = sim::ImuNoiseParams::ideal(mount.imu_noise.rate_hz);
+  if (options.noiseless_range) sim_options.range.sigma_m = 0.0;
   sim_options.seed = options.seed;
   auto lidar = sim::make_sim_lidar("OS1-64", sim_options);
   const sim::SceneContext scene{&world, &trajectory, mount.T_body_sensor};
@@ -108,6 +117,7 @@ inline DriveResult run_street_drive(const DriveOptions& options) {
       const Eigen::Vector3d error = o.x.p_world_imu - gt.translation();
       sq_error_sum += error.squaredNorm();
       r.end_error = error;
+      r.end_rotation_error = so3::log(o.x.R_world_imu * gt.linear().transpose());
       if (r.frames % kFramesPerMinute == 0) {
         const auto map = pipeline.map().stats();
         r.minutes.push_back({static_cast<double>(daemon::replay::current_rss_bytes()) / 1048576.0,
@@ -140,6 +150,9 @@ inline DriveResult run_street_drive(const DriveOptions& options) {
       r.end_error.z(), 100.0 * r.end_error.x() / r.path_m, 100.0 * r.end_error.y() / r.path_m,
       100.0 * r.end_error.z() / r.path_m, r.rmse_m,
       static_cast<unsigned long long>(r.map.removed_voxels));
+  std::printf("[long-drive] end attitude error (roll, pitch, yaw) %+.3f %+.3f %+.3f mrad\n",
+              1e3 * r.end_rotation_error.x(), 1e3 * r.end_rotation_error.y(),
+              1e3 * r.end_rotation_error.z());
   return r;
 }
 
