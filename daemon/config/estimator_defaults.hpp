@@ -61,6 +61,8 @@ int estimator_lidar_index(const LivodConfig& config);
 // `lio:` section, unless the file sets the key in its own lio: or in estimator.lio (then that
 // value holds for it, as without defaults). The point budget is one for the estimator: it counts
 // the points of every LiDAR in an update (docs/estimator.md "Several LiDARs").
+// A sparse spinning LiDAR (sparse_spinning) beside a LiDAR that is not and builds the map is
+// matched only (lio.build_map false) unless its own lio: sets build_map.
 void apply_estimator_defaults(LivodConfig& config);
 
 // Per-scan points the update works on (lio.point_budget) and the raw points per scan the point
@@ -71,5 +73,10 @@ inline constexpr double kRawPointsPerScan = 35000.0;
 // Spinning LiDARs with fewer rings than this insert their map points with the pose uncertainty
 // (lio.map_pose_covariance): measured, docs/estimator.md "Long drives".
 inline constexpr int kDenseRings = 64;
+
+// A spinning LiDAR with fewer than kDenseRings rings (false without facts: nothing is known).
+inline bool sparse_spinning(const std::optional<LidarModelFacts>& facts) {
+  return facts && facts->spinning && facts->beams > 0 && facts->beams < kDenseRings;
+}
 
 }  // namespace livod::daemon

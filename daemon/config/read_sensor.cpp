@@ -574,7 +574,8 @@ constexpr std::array<const char*, 10> kDriverSections = {
 
 // A LiDAR's own point settings in the estimator (docs/configuration.md, "`lio`" of a sensor):
 // the same ranges as estimator.lio's keys.
-void read_lidar_lio(MapReader& m, estimator::LidarLioParams& lio) {
+void read_lidar_lio(MapReader& m, SensorConfig& sensor) {
+  estimator::LidarLioParams& lio = sensor.lio;
   double dept_err = 0.0;
   if (m.read("dept_err", dept_err, left_open(0.0, 1.0))) lio.dept_err = dept_err;
   double beam_err_deg = 0.0;
@@ -582,7 +583,7 @@ void read_lidar_lio(MapReader& m, estimator::LidarLioParams& lio) {
   int point_filter_num = 1;
   if (m.read("point_filter_num", point_filter_num, 1, 1000))
     lio.point_filter_num = point_filter_num;
-  m.read("build_map", lio.build_map);
+  sensor.lio_build_map_given = m.read("build_map", lio.build_map);
   m.finish();
 }
 
@@ -757,7 +758,7 @@ void read_sensor(ProblemList& problems, const Value& item, const ReadContext& co
 
   if (const auto v = take_applicable(m, "lio", kind == SensorKind::lidar, "LiDARs")) {
     MapReader l(problems, v->node, v->path, v->at);
-    read_lidar_lio(l, sensor.lio);
+    read_lidar_lio(l, sensor);
   }
 
   const bool camera = kind == SensorKind::camera;

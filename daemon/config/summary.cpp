@@ -111,7 +111,10 @@ std::string summarize_config(const LivodConfig& config) {
           << from("beam_err_deg", s.lio.beam_err_deg.has_value()) << ", one point in "
           << s.lio.point_filter_num.value_or(lio.point_filter_num)
           << from("point_filter_num", s.lio.point_filter_num.has_value())
-          << (s.lio.build_map ? ", builds the map" : ", matched only (does not build the map)");
+          << (s.lio.build_map ? ", builds the map" : ", matched only (does not build the map)")
+          << (s.lio_from_model.contains("build_map")
+                  ? " (" + s.model + " default: sparse rings beside a denser LiDAR)"
+                  : "");
     }
     out << '\n';
   }

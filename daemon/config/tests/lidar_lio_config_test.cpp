@@ -144,5 +144,36 @@ TEST(LidarLioConfig, SomeEnabledLidarMustBuildTheMap) {
   EXPECT_TRUE(one.problems.empty()) << dump(one);
 }
 
+// The VLP-16's 16 rings beside the Avia: matched only unless its lio: says otherwise
+// (apply_estimator_defaults; measured in MultiLidarReplay.Vlp16PlusAviaStreetBeatsBothLidarsAlone).
+TEST(LidarLioConfig, SparseLidarBesideADenserOneIsMatchedOnlyByDefault) {
+  const auto pair = load(two_lidars(""));
+  ASSERT_TRUE(pair.problems.empty()) << dump(pair);
+  EXPECT_FALSE(pair.config.sensors.at(0).lio.build_map);
+  EXPECT_TRUE(pair.config.sensors.at(0).lio_from_model.contains("build_map"));
+  EXPECT_TRUE(pair.config.sensors.at(1).lio.build_map);
+  EXPECT_FALSE(pair.config.sensors.at(1).lio_from_model.contains("build_map"));
+  const std::string summary = summarize_config(pair.config);
+  EXPECT_NE(summary.find("matched only (does not build the map) (VLP-16 default: sparse rings "
+                         "beside a denser LiDAR)"),
+            std::string::npos)
+      << summary;
+
+  // Its own lio: wins.
+  const auto told = load(two_lidars("    lio: {build_map: true}\n"));
+  ASSERT_TRUE(told.problems.empty()) << dump(told);
+  EXPECT_TRUE(told.config.sensors.at(0).lio.build_map);
+  EXPECT_FALSE(told.config.sensors.at(0).lio_from_model.contains("build_map"));
+
+  // No denser LiDAR building the map (the Avia disabled, or matched only itself): the VLP-16
+  // builds it.
+  for (const char* avia : {"    enabled: false\n", "    lio: {build_map: false}\n"}) {
+    const auto alone = load(two_lidars("", avia));
+    ASSERT_TRUE(alone.problems.empty()) << dump(alone);
+    EXPECT_TRUE(alone.config.sensors.at(0).lio.build_map) << avia;
+    EXPECT_FALSE(alone.config.sensors.at(0).lio_from_model.contains("build_map")) << avia;
+  }
+}
+
 }  // namespace
 }  // namespace livod::daemon
