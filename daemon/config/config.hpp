@@ -209,11 +209,11 @@ struct SensorConfig {
   // LiDARs: this LiDAR's own point settings in the estimator (`lio:`; unset values are
   // estimator.lio's). With several LiDARs the model defaults fill the values the file leaves to
   // them from this LiDAR's own model (apply_estimator_defaults), and name them in lio_from_model.
-  // A sparse spinning LiDAR beside a denser one is matched only (build_map false, "build_map" in
-  // lio_from_model) unless the file sets lio.build_map (lio_build_map_given).
   estimator::LidarLioParams lio;
-  std::set<std::string>
-      lio_from_model;  // "dept_err", "beam_err_deg", "point_filter_num", "build_map"
+  // Keys filled from the model: "dept_err", "beam_err_deg", "point_filter_num", "build_map".
+  std::set<std::string> lio_from_model;
+  // A sparse spinning LiDAR beside a denser one is matched only (build_map false, in
+  // lio_from_model) unless the file sets lio.build_map:
   bool lio_build_map_given = false;
   CameraConfig camera;
   CanConfig can;
