@@ -47,9 +47,9 @@ inline const ConfigProblem* find_problem(const ConfigResult& result, ProblemKind
 }
 
 // Loads a configuration for the schema tests, without the "not implemented" errors: these tests
-// check reading and validation, and use sensors livod cannot run yet (a serial IMU, two LiDARs,
-// cameras). What is implemented is checked by ConfigImplemented (problems_test.cpp), which loads
-// with load_config_from_string itself.
+// check reading and validation, and some use combinations livod refuses to run (a second IMU
+// besides the body IMU, two cameras, the visual update with two LiDARs). What is refused is
+// checked by ConfigImplemented (problems_test.cpp), which loads with load_config_from_string.
 inline ConfigResult without_not_implemented(ConfigResult r) {
   std::erase_if(r.problems,
                 [](const ConfigProblem& p) { return p.kind == ProblemKind::not_implemented; });
