@@ -35,6 +35,34 @@ std::string number(double v) {
   return os.str();
 }
 
+bool enabled_lidar(const SensorConfig& s) {
+  return s.enabled && sensor_kind(s.driver) == SensorKind::lidar;
+}
+
+// A sparse spinning LiDAR beside a denser one that builds the map is matched only: its rings cut
+// voxels in single-ring lines, planes whose tilt about the line nothing observes, and the pair
+// matches those (docs/estimator.md "Several LiDARs": a VLP-16 beside an Avia on the realistic
+// street 17.4 mm building the map, 5.1 mm matched only, the Avia alone 7.2 mm). A LiDAR without
+// model facts is never taken for the denser one (a generic Ouster "OS" may have 16 rings).
+void match_sparse_beside_dense(LivodConfig& config) {
+  std::vector<SensorConfig*> sparse;  // those whose file leaves build_map to the default
+  bool dense_builds_map = false;
+  for (SensorConfig& s : config.sensors) {
+    if (!enabled_lidar(s)) continue;
+    const auto facts = lidar_model_facts(s.model);
+    if (sparse_spinning(facts)) {
+      if (!s.lio_build_map_given) sparse.push_back(&s);
+    } else if (facts && s.lio.build_map) {
+      dense_builds_map = true;
+    }
+  }
+  if (!dense_builds_map) return;
+  for (SensorConfig* s : sparse) {
+    s->lio.build_map = false;
+    s->lio_from_model.insert("build_map");
+  }
+}
+
 }  // namespace
 
 std::optional<LidarModelFacts> lidar_model_facts(std::string_view model) {
@@ -166,8 +194,7 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
 int estimator_lidar_index(const LivodConfig& config) {
   if (config.body_is_internal_imu) return config.body_sensor_index;
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
-    const auto& s = config.sensors[i];
-    if (s.enabled && sensor_kind(s.driver) == SensorKind::lidar) return static_cast<int>(i);
+    if (enabled_lidar(config.sensors[i])) return static_cast<int>(i);
   }
   return -1;
 }
@@ -183,9 +210,7 @@ void apply_estimator_defaults(LivodConfig& config) {
   // bearing noise on an Avia's points, or a VLP-16's every point on an OS1-128 beside it).
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
     SensorConfig& s = config.sensors[i];
-    if (static_cast<int>(i) == lidar || !s.enabled || sensor_kind(s.driver) != SensorKind::lidar) {
-      continue;
-    }
+    if (static_cast<int>(i) == lidar || !enabled_lidar(s)) continue;
     const auto facts = lidar_model_facts(s.model);
     if (!facts) continue;  // no facts: estimator.lio's values, as the file gives none
     estimator::EstimatorParams own = file_values;
@@ -199,28 +224,7 @@ void apply_estimator_defaults(LivodConfig& config) {
     fill("beam_err_deg", s.lio.beam_err_deg, own.lio.beam_err_deg);
     fill("point_filter_num", s.lio.point_filter_num, own.lio.point_filter_num);
   }
-  // A sparse spinning LiDAR beside a denser one that builds the map is matched only: its rings cut
-  // voxels in single-ring lines, planes whose tilt about the line nothing observes, and the pair
-  // matches those (docs/estimator.md "Several LiDARs": a VLP-16 beside an Avia on the realistic
-  // street 17.4 mm building the map, 5.1 mm matched only, the Avia alone 7.2 mm).
-  const auto is_lidar = [](const SensorConfig& s) {
-    return s.enabled && sensor_kind(s.driver) == SensorKind::lidar;
-  };
-  bool dense_builds_map = false;
-  for (const SensorConfig& s : config.sensors) {
-    const auto facts = lidar_model_facts(s.model);
-    if (is_lidar(s) && s.lio.build_map && facts && !sparse_spinning(facts)) {
-      dense_builds_map = true;
-    }
-  }
-  if (!dense_builds_map) return;
-  for (SensorConfig& s : config.sensors) {
-    if (!is_lidar(s) || s.lio_build_map_given || !sparse_spinning(lidar_model_facts(s.model))) {
-      continue;
-    }
-    s.lio.build_map = false;
-    s.lio_from_model.insert("build_map");
-  }
+  match_sparse_beside_dense(config);
 }
 
 }  // namespace livod::daemon
