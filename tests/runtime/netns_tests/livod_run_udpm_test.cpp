@@ -136,7 +136,8 @@ struct Rig {
   const char* scenario;
   double imu_rate_hz;  // the LiDAR's internal IMU
   // How far a live pose may be from the replay's: the realistic 10 m/s street amplifies the live
-  // path's timing differences to 0.25-1.7 mm (daemon_live_test.cpp, live_matches_replay).
+  // path's timing differences to 0.03-2.03 mm over runs (daemon_live_test.cpp,
+  // live_matches_replay, has the bound's reasoning).
   double max_dp_m = 1e-3;
 };
 
@@ -218,7 +219,7 @@ TEST_P(LivodRunProcess, BroadcastsOverUdpmThePosesReplayComputes) {
 
 INSTANTIATE_TEST_SUITE_P(EachFamily, LivodRunProcess,
                          testing::Values(Rig{"room_handheld_os1_64", 100.0},
-                                         Rig{"street_vehicle_hdl32e", 200.0, 2e-3},
+                                         Rig{"street_vehicle_hdl32e", 200.0, 5e-3},
                                          Rig{"room_handheld_mid360", 200.0}),
                          [](const testing::TestParamInfo<Rig>& rig) {
                            return std::string(rig.param.scenario);
