@@ -498,10 +498,7 @@ void LioPipeline::process_group(const MeasurementGroup& group,
     report.timings.vio_ms = ms_since(t0);
     estimate_final();
   }
-  // A full map traversal costs as much as a large part of the frame on a big (street) map:
-  // refreshed every kMapStatsPeriod frames, reported from the last refresh in between.
-  if (counters_.scans_processed % kMapStatsPeriod == 0) map_stats_ = map_->stats();
-  report.map = map_stats_;
+  report.map = map_->stats();
   report.timings.total_ms = ms_since(t_total);
   ++counters_.scans_processed;
 

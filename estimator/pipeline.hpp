@@ -89,7 +89,7 @@ struct FrameReport {
   bool updated = false;  // false: first frame (map seeded) or too few matches
   DegeneracyReport degeneracy;
   FrameTimings timings;
-  VoxelMapStats map;   // refreshed every 10th frame (a full traversal), else the last refresh
+  VoxelMapStats map;   // the map after this frame
   vio::VioReport vio;  // image groups
 };
 
@@ -257,8 +257,6 @@ class LioPipeline {
   std::vector<std::uint32_t> point_lidar_;     // per point of undistorted_: its LiDAR
   std::vector<ScanPoint> scan_points_;
   std::vector<CovPoint> world_points_;
-  static constexpr std::uint64_t kMapStatsPeriod = 10;
-  VoxelMapStats map_stats_;
   std::unique_ptr<vio::VioProcessor> vio_;
   std::vector<Eigen::Vector3d> scan_world_;  // the scan in the world after the LIO update
   std::vector<Eigen::Vector3d> no_normals_;
