@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <string>
 
 #include "daemon/config/load_config.hpp"
 #include "daemon/config/tests/config_test_support.hpp"
@@ -17,6 +18,15 @@ using test::dump;
 using test::find_problem;
 using test::load;
 using test::minimal_config;
+
+// The minimal configuration followed by `yaml`. Appended as a std::string of run-time length: GCC
+// 12 inlines `minimal_config() + "long literal"` here into a memcpy it then reports as out of
+// bounds (a bogus -Warray-bounds, GCC bug 105651; it appeared with the tests' precompiled header).
+std::string minimal_config_and(const std::string& yaml) {
+  std::string config = minimal_config();
+  config.append(yaml);
+  return config;
+}
 
 TEST(ConfigMapSaves, Defaults) {
   const auto r = load(minimal_config());
@@ -33,8 +43,8 @@ TEST(ConfigMapSaves, Defaults) {
 TEST(ConfigMapSaves, ValuesAreReadAndFoldersChecked) {
   const auto dir = livod::test::temp_dir("config-map-saves");
   {
-    const auto r = load(minimal_config() + "outputs:\n  map_saves: {enabled: false, directory: " +
-                        dir.string() + ", overwrite: true, at_stop: true}\n");
+    const auto r = load(minimal_config_and("outputs:\n  map_saves: {enabled: false, directory: " +
+                                           dir.string() + ", overwrite: true, at_stop: true}\n"));
     ASSERT_TRUE(r.ok()) << dump(r);
     EXPECT_TRUE(r.problems.empty()) << dump(r);
     const auto& s = r.config.outputs.map_saves;
@@ -44,17 +54,16 @@ TEST(ConfigMapSaves, ValuesAreReadAndFoldersChecked) {
     EXPECT_TRUE(s.at_stop);
   }
   {
-    const auto r = load(minimal_config() +
-                        "outputs:\n  map_saves: {directory: " + (dir / "nope").string() + "}\n");
+    const auto r = load(minimal_config_and(
+        "outputs:\n  map_saves: {directory: " + (dir / "nope").string() + "}\n"));
     EXPECT_TRUE(r.ok()) << dump(r);
     EXPECT_NE(find_problem(r, ProblemKind::missing_file, "outputs.map_saves.directory"), nullptr)
         << dump(r);
   }
   {
     std::ofstream(dir / "file") << "x";
-    const auto r =
-        load(minimal_config() + "outputs:\n  map_saves: {directory: " + (dir / "file").string() +
-             ", overwirte: true}\n");
+    const auto r = load(minimal_config_and(
+        "outputs:\n  map_saves: {directory: " + (dir / "file").string() + ", overwirte: true}\n"));
     EXPECT_FALSE(r.ok());
     EXPECT_NE(find_problem(r, ProblemKind::invalid_value, "outputs.map_saves.directory"), nullptr)
         << dump(r);
@@ -64,7 +73,7 @@ TEST(ConfigMapSaves, ValuesAreReadAndFoldersChecked) {
 }
 
 TEST(ConfigMapSaves, CommandChannelMustNotShareAChannel) {
-  const auto r = load(minimal_config() + "outputs:\n  lcm: {channels: {command: LIVOD_POSE}}\n");
+  const auto r = load(minimal_config_and("outputs:\n  lcm: {channels: {command: LIVOD_POSE}}\n"));
   EXPECT_FALSE(r.ok());
   EXPECT_NE(find_problem(r, ProblemKind::inconsistent, "outputs.lcm.channels.command"), nullptr)
       << dump(r);
