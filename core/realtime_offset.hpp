@@ -4,13 +4,16 @@
 // clock_gettime(REALTIME) / (MONOTONIC) / (REALTIME) triples; the tightest bracket of a few tries
 // wins, which bounds the error by half the bracket width (typically < 100 ns with the vDSO).
 // REALTIME can be stepped by NTP at any time, so callers refresh() periodically (the capture
-// threads do it every 100 ms) and a step shows up as a jump of offset_ns().
+// threads do it every kRealtimeOffsetRefreshNs) and a step shows up as a jump of offset_ns().
 
 #include <cstdint>
 
 #include "core/time.hpp"
 
 namespace livod {
+
+// How often a capture thread re-measures the offset: an NTP step is seen within 100 ms.
+inline constexpr std::int64_t kRealtimeOffsetRefreshNs = 100'000'000;
 
 class RealtimeToMonotonic {
  public:

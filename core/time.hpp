@@ -12,6 +12,8 @@
 
 namespace livod {
 
+inline constexpr std::int64_t kNsPerSecond = 1'000'000'000;
+
 using Nanoseconds = std::chrono::nanoseconds;
 
 template <class Tag>
@@ -61,7 +63,9 @@ struct Stamp {
 // CLOCK_MONOTONIC now, as a HostTime. Defined in time.cpp so that <time.h> stays out of headers.
 HostTime host_now();
 
-constexpr double to_seconds(Nanoseconds d) { return static_cast<double>(d.count()) * 1e-9; }
+constexpr double to_seconds(Nanoseconds d) {
+  return static_cast<double>(d.count()) * 1e-9;
+}
 constexpr Nanoseconds from_seconds(double s) {
   return Nanoseconds(static_cast<std::int64_t>(s * 1e9 + (s >= 0 ? 0.5 : -0.5)));
 }

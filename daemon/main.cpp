@@ -17,8 +17,6 @@
 
 namespace livod::daemon {
 
-constexpr int kExitUsage = 2;
-
 struct UnknownSubcommand {
   std::string name;
   std::string hint;  // " (did you mean 'x'?); subcommands: a, b, c"

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/time.hpp"
 
 namespace livod::io {
 
@@ -22,7 +23,6 @@ constexpr std::size_t kClassicMaxLen = 8;
 constexpr std::size_t kFdMaxLen = 64;
 constexpr std::size_t kMaxInterfaceName = 15;  // Linux IFNAMSIZ minus the terminating NUL
 constexpr std::size_t kMaxSecondsDigits = 10;  // int64 ns overflows beyond year 2262 anyway
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 // Longest meaningful line: timestamp, interface, 8-digit id, "##F", 64 bytes with separators and
 // a direction flag, with room to spare. Longer lines are errors (and bound memory for binary
 // files given by mistake).

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace livod::io {
 namespace {
@@ -56,12 +57,6 @@ bool is_blank(char c) {
   return c == ' ' || c == '\t' || c == '\r';
 }
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && is_blank(s.front())) s.remove_prefix(1);
-  while (!s.empty() && is_blank(s.back())) s.remove_suffix(1);
-  return s;
-}
-
 struct Field {
   std::string_view text;
   std::uint64_t offset = 0;  // byte offset in the file
@@ -85,7 +80,7 @@ class LineReader {
       line.offset = position_;
       line.number = ++number_;
       position_ = end + 1;
-      const std::string_view content = trim(line.text);
+      const std::string_view content = trim_whitespace(line.text);
       if (content.empty() || content.front() == '#') continue;
       return true;
     }
@@ -119,7 +114,7 @@ void split_row(const std::string& source, const Line& line, char delimiter, std:
     std::string_view raw = text.substr(begin, end - begin);
     std::size_t lead = 0;
     while (lead < raw.size() && is_blank(raw[lead])) ++lead;
-    fields.push_back(Field{trim(raw), line.offset + begin + lead});
+    fields.push_back(Field{trim_whitespace(raw), line.offset + begin + lead});
   };
   if (delimiter == ' ') {
     while (i < text.size()) {
@@ -276,7 +271,7 @@ class YamlFile {
   }
 
   [[nodiscard]] double number(const YAML::Node& n, const char* key) const {
-    const auto value = to_double(trim(string(n, key)));
+    const auto value = to_double(trim_whitespace(string(n, key)));
     if (!value) fail(n.Mark(), std::string("'") + key + "' is not a finite number");
     return *value;
   }

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace livod::io {
 namespace {
@@ -151,13 +152,6 @@ std::string lower(std::string_view s) {
   return out;
 }
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
-    s.remove_suffix(1);
-  return s;
-}
-
 }  // namespace
 
 HttpResponse http_get(const std::string& host, std::uint16_t port, const std::string& path,
@@ -194,8 +188,8 @@ HttpResponse http_get(const std::string& host, std::uint16_t port, const std::st
   if (sr.ec != std::errc() || sr.ptr != status_line.data() + 12 || response.status < 100) {
     ex.fail("malformed status code in '" + std::string(status_line.substr(0, 80)) + "'");
   }
-  response.reason =
-      std::string(trim(status_line.substr(std::min<std::size_t>(12, status_line.size()))));
+  response.reason = std::string(
+      trim_whitespace(status_line.substr(std::min<std::size_t>(12, status_line.size()))));
 
   std::optional<std::size_t> content_length;
   bool chunked = false;
@@ -205,8 +199,8 @@ HttpResponse http_get(const std::string& host, std::uint16_t port, const std::st
     const std::string_view line = head.substr(0, line_end);
     const std::size_t colon = line.find(':');
     if (colon == std::string_view::npos) continue;
-    const std::string name = lower(trim(line.substr(0, colon)));
-    const std::string_view value = trim(line.substr(colon + 1));
+    const std::string name = lower(trim_whitespace(line.substr(0, colon)));
+    const std::string_view value = trim_whitespace(line.substr(colon + 1));
     if (name == "content-length") {
       std::size_t n = 0;
       const auto r = std::from_chars(value.data(), value.data() + value.size(), n);
@@ -235,7 +229,7 @@ HttpResponse http_get(const std::string& host, std::uint16_t port, const std::st
       }
       std::string_view size_text(raw.data() + pos, eol - pos);
       size_text = size_text.substr(0, size_text.find(';'));
-      size_text = trim(size_text);
+      size_text = trim_whitespace(size_text);
       std::size_t size = 0;
       const auto r =
           std::from_chars(size_text.data(), size_text.data() + size_text.size(), size, 16);

@@ -16,30 +16,26 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/time.hpp"
+#include "io/packet_headers.hpp"
 #include "io/pcap_records.hpp"
 
 namespace livod::io {
 
 namespace {
 
-constexpr std::uint16_t kEthertypeIpv4 = 0x0800;
 constexpr std::uint16_t kEthertypeVlan = 0x8100;     // 802.1Q
 constexpr std::uint16_t kEthertypeQinQ = 0x88A8;     // 802.1ad service tag
 constexpr std::uint16_t kEthertypeQinQOld = 0x9100;  // pre-standard double tagging
 constexpr std::size_t kMaxVlanTags = 8;              // bound on the tag loop; real stacks use 2
-constexpr std::size_t kEthernetHeader = 14;
 constexpr std::size_t kVlanTag = 4;
 constexpr std::size_t kSllHeader = 16;
 constexpr std::size_t kSll2Header = 20;
 constexpr std::size_t kNullHeader = 4;
 constexpr std::uint32_t kAfInet = 2;  // AF_INET in every BSD loopback header
 constexpr std::size_t kIpv4MinHeader = 20;
-constexpr std::uint8_t kIpProtoUdp = 17;
-constexpr std::uint16_t kIpMoreFragments = 0x2000;
 constexpr std::uint16_t kIpOffsetMask = 0x1FFF;
-constexpr std::size_t kUdpHeader = 8;
 constexpr int kWriterSnaplen = 262144;  // libpcap's MAXIMUM_SNAPLEN
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 // Resynchronisation after a damaged record (see RecordScanner).
 constexpr std::uint32_t kMaxRecordBytes = 262144;        // libpcap's largest snapshot length
 constexpr std::int64_t kMaxResyncTimeJumpS = 24 * 3600;  // a candidate record's time vs the last

@@ -6,6 +6,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/time.hpp"
+#include "io/packet_headers.hpp"
+
 namespace livod::io {
 namespace {
 
@@ -13,17 +16,11 @@ constexpr std::uint32_t kMagicMicro = 0xA1B2C3D4;
 constexpr std::uint32_t kMagicNano = 0xA1B23C4D;
 constexpr std::uint32_t kSnaplen = 262144;  // libpcap's MAXIMUM_SNAPLEN
 constexpr std::uint32_t kLinkEthernet = 1;  // DLT_EN10MB
-constexpr std::uint16_t kEthertypeIpv4 = 0x0800;
-constexpr std::size_t kEthernetHeader = 14;
 constexpr std::size_t kIpv4Header = 20;
-constexpr std::size_t kUdpHeader = 8;
-constexpr std::uint8_t kIpProtoUdp = 17;
-constexpr std::uint16_t kIpMoreFragments = 0x2000;
 constexpr std::size_t kMaxUdpPayload = 65535 - kIpv4Header - kUdpHeader;
 constexpr std::size_t kMinEthernetFrame = 60;  // without FCS; shorter frames are padded
 constexpr std::size_t kMinIpv4Mtu = 68;        // RFC 791: every host must accept this
 constexpr std::size_t kMaxIpv4Mtu = 65535;
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 
 void put16(std::byte* out, std::uint16_t v) {
   out[0] = static_cast<std::byte>(v >> 8);

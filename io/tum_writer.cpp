@@ -3,17 +3,19 @@
 #include <cinttypes>
 #include <cstdio>
 
+#include "core/time.hpp"
+
 namespace livod::io {
 
 std::string format_seconds(std::int64_t ns) {
-  constexpr std::uint64_t kNsPerSecond = 1'000'000'000;
+  constexpr auto kNsPerSecondUnsigned = static_cast<std::uint64_t>(kNsPerSecond);
   const bool negative = ns < 0;
   // Work on the magnitude as unsigned so that INT64_MIN does not overflow.
   const std::uint64_t magnitude =
       negative ? ~static_cast<std::uint64_t>(ns) + 1 : static_cast<std::uint64_t>(ns);
   char text[40];
   std::snprintf(text, sizeof text, "%s%" PRIu64 ".%09" PRIu64, negative ? "-" : "",
-                magnitude / kNsPerSecond, magnitude % kNsPerSecond);
+                magnitude / kNsPerSecondUnsigned, magnitude % kNsPerSecondUnsigned);
   return text;
 }
 

@@ -143,7 +143,7 @@ struct UdpSocket::Impl {
     }
     const HostTime now = host_now();
     // Refresh the REALTIME->MONOTONIC offset at 10 Hz: NTP may step REALTIME at any time.
-    if (now - last_offset_refresh > Nanoseconds(100'000'000)) {
+    if (now - last_offset_refresh > Nanoseconds(kRealtimeOffsetRefreshNs)) {
       clock_offset.refresh();
       last_offset_refresh = now;
     }

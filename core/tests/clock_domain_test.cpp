@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "core/clock_hull.hpp"
+#include "core/time.hpp"
 #include "tests/support/data_dir.hpp"
 
 namespace livod {
@@ -35,7 +36,6 @@ using std::chrono::microseconds;
 using std::chrono::milliseconds;
 using std::chrono::seconds;
 
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 constexpr std::int64_t kHostStart = 1000 * kNsPerSecond;  // CLOCK_MONOTONIC ~17 min after boot
 
 // ---- deterministic random numbers ---------------------------------------------------------------

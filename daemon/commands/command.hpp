@@ -9,6 +9,13 @@ class App;
 
 namespace livod::daemon {
 
+// The process's exit statuses shared by the subcommands: 0 success, 1 failure, 2 bad usage (a bad
+// command line or configuration), 3 a replay or decode that could not read part of its input
+// (docs/replay.md, --accept-partial-input).
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitUsage = 2;
+inline constexpr int kExitPartialInput = 3;
+
 struct CommandContext {
   int exit_code = 0;
 };

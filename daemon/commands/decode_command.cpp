@@ -36,9 +36,6 @@
 namespace livod::daemon {
 namespace {
 
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
-constexpr int kExitPartialInput = 3;
 constexpr std::size_t kPortsShown = 8;
 
 struct DecodeArgs {

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/time.hpp"
 #include "daemon/commands/command.hpp"
 #include "io/candump.hpp"
 #include "io/input_loss.hpp"
@@ -46,7 +47,6 @@ namespace fs = std::filesystem;
 
 constexpr std::size_t kHeadBytes = 64;
 constexpr std::size_t kMaxSizesShown = 6;  // size histogram entries per port
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 
 std::vector<std::byte> read_head(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -33,7 +33,6 @@
 namespace livod::daemon {
 namespace {
 
-constexpr int kExitFailure = 1;
 // The loop of this command's main thread: drain the scheduler-side rings, supervise, signals.
 constexpr Nanoseconds kTurn{20'000'000};
 constexpr Nanoseconds kStatsLogPeriod{60'000'000'000};

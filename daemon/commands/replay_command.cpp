@@ -31,9 +31,6 @@
 namespace livod::daemon {
 namespace {
 
-constexpr int kExitFailure = 1;
-constexpr int kExitPartialInput = 3;
-
 struct ReplayArgs {
   std::string config;
   std::string out;

@@ -26,8 +26,6 @@
 namespace livod::daemon {
 namespace {
 
-constexpr int kExitFailure = 1;
-
 struct RunArgs {
   std::string config;
   int threads = -1;

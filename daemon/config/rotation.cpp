@@ -6,11 +6,11 @@
 #include <numbers>
 #include <sstream>
 
+#include "core/units.hpp"
+
 namespace livod::daemon {
 
 namespace {
-
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 std::string number(double v) {
   std::ostringstream out;

@@ -17,7 +17,6 @@
 namespace livod::camera {
 namespace {
 
-constexpr std::int64_t kRealtimeRefreshNs = 100'000'000;
 constexpr std::int64_t kPtpCheckNs = 1'000'000'000;
 
 // Aravis keeps process-wide device lists and interface state: camera discovery and creation from
@@ -470,7 +469,7 @@ bool AravisCamera::service() {
   }
   if (now >= m.next_realtime_refresh_ns) {
     m.realtime.refresh();
-    m.next_realtime_refresh_ns = now + kRealtimeRefreshNs;
+    m.next_realtime_refresh_ns = now + kRealtimeOffsetRefreshNs;
     guint64 completed = 0, failures = 0, underruns = 0;
     arv_stream_get_statistics(m.stream, &completed, &failures, &underruns);
     const std::lock_guard lock(m.status_mutex);

@@ -6,12 +6,12 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "core/realtime_offset.hpp"
 
 namespace livod::camera {
 namespace {
 
 constexpr std::int64_t kExposureUnitNs = 100'000;  // V4L2_CID_EXPOSURE_ABSOLUTE: 100 us
-constexpr std::int64_t kRealtimeRefreshNs = 100'000'000;
 
 std::string err_text(int err) {
   return std::strerror(err < 0 ? -err : err);
@@ -241,7 +241,7 @@ bool V4l2Camera::service() {
   if (auto_exposure_ && now >= next_exposure_poll_ns_) read_back_exposure();
   if (now >= next_realtime_refresh_ns_) {
     realtime_.refresh();
-    next_realtime_refresh_ns_ = now + kRealtimeRefreshNs;
+    next_realtime_refresh_ns_ = now + kRealtimeOffsetRefreshNs;
   }
   return true;
 }

@@ -6,17 +6,9 @@
 #include <cerrno>
 #include <utility>
 
+#include "drivers/capture/single_writer_counter.hpp"
+
 namespace livod::drivers::capture {
-namespace {
-
-// Single-writer counters: a plain store publishes the new value (no locked read-modify-write on
-// the capture path).
-template <class T>
-void publish(std::atomic<T>& counter, T value) {
-  counter.store(value, std::memory_order_relaxed);
-}
-
-}  // namespace
 
 const char* to_string(SchedulingResult r) {
   switch (r) {

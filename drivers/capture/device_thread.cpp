@@ -6,20 +6,9 @@
 #include <exception>
 #include <utility>
 
+#include "drivers/capture/single_writer_counter.hpp"
+
 namespace livod::drivers::capture {
-namespace {
-
-template <class T>
-void publish(std::atomic<T>& a, T value) {
-  a.store(value, std::memory_order_relaxed);
-}
-
-template <class T>
-void bump(std::atomic<T>& a) {
-  a.store(a.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-}
-
-}  // namespace
 
 const char* to_string(DeviceState s) {
   switch (s) {

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace livod::drivers::hesai {
 namespace {
@@ -17,18 +18,12 @@ namespace {
 constexpr double kMaxElevationDeg = 85.0;
 constexpr double kMaxAzimuthOffsetDeg = 30.0;
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front())) != 0) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back())) != 0) s.remove_suffix(1);
-  return s;
-}
-
 std::vector<std::string_view> split(std::string_view line) {
   std::vector<std::string_view> out;
   std::size_t start = 0;
   for (std::size_t i = 0; i <= line.size(); ++i) {
     if (i == line.size() || line[i] == ',') {
-      out.push_back(trim(line.substr(start, i - start)));
+      out.push_back(trim_whitespace(line.substr(start, i - start)));
       start = i + 1;
     }
   }
@@ -77,7 +72,7 @@ AngleCorrections parse_angle_corrections(std::string_view text, const std::strin
   if (text.substr(0, 3) == "\xEF\xBB\xBF") offset = 3;  // UTF-8 byte order mark
   while (offset < text.size()) {
     const std::size_t end = std::min(text.find('\n', offset), text.size());
-    const std::string_view line = trim(text.substr(offset, end - offset));
+    const std::string_view line = trim_whitespace(text.substr(offset, end - offset));
     const std::size_t line_offset = offset;
     offset = end + 1;
     if (line.empty()) continue;

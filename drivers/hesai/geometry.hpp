@@ -11,6 +11,7 @@
 #include <numbers>
 #include <vector>
 
+#include "core/units.hpp"
 #include "drivers/hesai/calibration.hpp"
 
 namespace livod::drivers::hesai {
@@ -33,7 +34,6 @@ class BeamGeometry {
   };
 
   explicit BeamGeometry(const AngleCorrections& corrections) {
-    constexpr double kDegToRad = std::numbers::pi / 180.0;
     for (const ChannelCorrection& k : corrections.channels) {
       channels_.push_back(
           {std::cos(k.elevation_deg * kDegToRad), std::sin(k.elevation_deg * kDegToRad),

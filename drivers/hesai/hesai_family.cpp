@@ -16,7 +16,7 @@ constexpr std::array<std::string_view, 1> kXt32Aliases{"XT32"};
 // Points per second: channels x firing rounds per second (model.hpp). Ranges and range accuracy:
 // Hesai datasheets (PandarXT-32: 0.05-120 m, +-1 cm; Pandar40P: 0.3-200 m, +-2 cm). Beam
 // divergence: not in livod's sources. Neither model has an IMU.
-constexpr std::array<LidarModelInfo, 2> kModels{{
+constexpr std::array<LidarModelInfo, 2> kFamilyModels{{
     {"PANDARXT32", kXt32Aliases, "Hesai PandarXT-32 (needs its angle correction file)", 32,
      640'000.0, 10.0, 0.05, 120.0, 0.01, std::nullopt, false, kPorts},
     {"PANDAR40P",
@@ -90,7 +90,7 @@ const LidarFamily& hesai_family() {
   static const LidarFamily kFamily{
       .driver = "hesai",
       .vendor = "Hesai",
-      .models = kModels,
+      .models = kFamilyModels,
       .model_required = true,
       .port_names = kPortNames,
       .cut_modes = kCuts,

@@ -2,10 +2,11 @@
 
 #include <chrono>
 
+#include "core/time.hpp"
+
 namespace livod::drivers::hesai {
 namespace {
 
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 constexpr std::uint32_t kMicrosecondsPerSecond = 1'000'000;
 
 // PandarXT-32 offsets.

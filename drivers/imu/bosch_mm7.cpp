@@ -5,6 +5,7 @@
 #include <limits>
 #include <numbers>
 
+#include "core/units.hpp"
 #include "drivers/imu/can_signal.hpp"
 
 namespace livod::imu {
@@ -18,7 +19,6 @@ constexpr double kTempOffsetC = -50.0;
 constexpr std::uint8_t kTempInvalidLow = 0xFF;
 constexpr std::uint8_t kTempInvalidHigh = 0xC9;
 constexpr std::uint8_t kStatusMask = 0x07;
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr int kCounterModulus = 16;
 
 constexpr CanBitField kRate{0, 16, false, false};

@@ -5,12 +5,13 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "core/units.hpp"
+
 namespace livod::imu {
 namespace {
 
 constexpr std::uint32_t kAllAxes = 0x3F;
 constexpr int kClassicBytes = 8;
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 bool is_accel(ImuAxis a) {
   return a == ImuAxis::accel_x || a == ImuAxis::accel_y || a == ImuAxis::accel_z;

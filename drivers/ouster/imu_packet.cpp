@@ -5,24 +5,16 @@
 #include <cstring>
 #include <numbers>
 
+#include "core/units.hpp"
+#include "drivers/ouster/wire_load.hpp"
+
 namespace livod::drivers::ouster {
 namespace {
-
-static_assert(std::endian::native == std::endian::little,
-              "IMU fields are read with memcpy from the little-endian wire format");
-
-template <class T>
-T load(const std::byte* p) {
-  T v{};
-  std::memcpy(&v, p, sizeof(T));
-  return v;
-}
 
 Eigen::Vector3d load_vec3f(const std::byte* p) {
   return {load<float>(p), load<float>(p + 4), load<float>(p + 8)};
 }
 
-constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
 constexpr std::size_t kNmeaTimestampSize = 8;
 
 PacketError parse_legacy(std::span<const std::byte> bytes, ImuPacket& out) {
@@ -34,7 +26,7 @@ PacketError parse_legacy(std::span<const std::byte> bytes, ImuPacket& out) {
   m.timestamp_ns = load<std::uint64_t>(p + 16);  // gyro_ts
   m.measurement_id = 0;
   m.accel_m_s2 = load_vec3f(p + 24) * kStandardGravity;
-  m.gyro_rad_s = load_vec3f(p + 36) * kRadiansPerDegree;
+  m.gyro_rad_s = load_vec3f(p + 36) * kDegToRad;
   m.valid = m.accel_m_s2.allFinite() && m.gyro_rad_s.allFinite();
   out.header = PacketHeader{};
   out.nmea_timestamp_ns = 0;

@@ -10,6 +10,7 @@
 
 #include "drivers/ouster/packet_format.hpp"
 #include "drivers/ouster/profile.hpp"
+#include "drivers/ouster/wire_load.hpp"
 
 namespace livod::drivers::ouster {
 
@@ -58,12 +59,6 @@ class LidarPacket {
   }
 
  private:
-  template <class T>
-  static T load(const std::byte* p) {
-    T v{};
-    std::memcpy(&v, p, sizeof(T));
-    return v;
-  }
   [[nodiscard]] const std::byte* column(std::uint32_t col) const {
     return data_ + format_->packet_header_size + col * format_->column_size;
   }

@@ -4,19 +4,10 @@
 #include <cstring>
 
 #include "drivers/ouster/crc64.hpp"
+#include "drivers/ouster/wire_load.hpp"
 
 namespace livod::drivers::ouster {
 namespace {
-
-static_assert(std::endian::native == std::endian::little,
-              "packet fields are read with memcpy from the little-endian wire format");
-
-template <class T>
-T load(const std::byte* p) {
-  T v{};
-  std::memcpy(&v, p, sizeof(T));
-  return v;
-}
 
 std::uint64_t load_bytes_le(const std::byte* p, std::size_t n) {
   std::uint64_t v = 0;

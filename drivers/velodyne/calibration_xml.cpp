@@ -15,12 +15,12 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 #include "drivers/velodyne/calibration.hpp"
 
 namespace livod::drivers::velodyne {
 namespace {
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kCmToM = 0.01;
 
 struct XmlState {

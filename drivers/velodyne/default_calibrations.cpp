@@ -8,6 +8,7 @@
 #include <numbers>
 #include <span>
 
+#include "core/units.hpp"
 #include "drivers/velodyne/calibration.hpp"
 
 namespace livod::drivers::velodyne {
@@ -103,7 +104,6 @@ constexpr std::array<NominalAngles, 128> kVls128{{
 }};
 
 Calibration from_table(std::span<const NominalAngles> table, Model model) {
-  constexpr double kDegToRad = std::numbers::pi / 180.0;
   Calibration calibration;
   calibration.lasers.resize(table.size());
   for (std::size_t i = 0; i < table.size(); ++i) {

@@ -2,12 +2,11 @@
 
 #include <numbers>
 
+#include "core/units.hpp"
 #include "drivers/velodyne/wire.hpp"
 
 namespace livod::drivers::velodyne {
 namespace {
-
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 int twelve_bit_signed(std::uint16_t word) {
   const int v = word & 0x0FFF;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "io/rosbag/md5.hpp"
 
 namespace livod::io::rosbag {
@@ -19,13 +20,6 @@ constexpr int kMaxDepth = 32;
 constexpr std::array<std::string_view, 16> kBuiltinTypes = {
     "bool",   "byte",  "char",   "int8",    "uint8",   "int16",  "uint16", "int32",
     "uint32", "int64", "uint64", "float32", "float64", "string", "time",   "duration"};
-
-std::string_view trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string_view::npos) return {};
-  const auto last = s.find_last_not_of(" \t\r\n");
-  return s.substr(first, last - first + 1);
-}
 
 std::vector<std::string_view> split_whitespace(std::string_view s) {
   std::vector<std::string_view> out;
@@ -41,7 +35,7 @@ std::vector<std::string_view> split_whitespace(std::string_view s) {
 }
 
 bool is_separator(std::string_view line) {
-  line = trim(line);
+  line = trim_whitespace(line);
   return line.size() == kSeparatorLength && line.find_first_not_of('=') == std::string_view::npos;
 }
 
@@ -89,13 +83,13 @@ class Md5Computer {
         continue;
       }
       if (expect_msg_line) {
-        const auto t = trim(line);
+        const auto t = trim_whitespace(line);
         if (t.empty()) continue;
         if (t.substr(0, kMsgPrefix.size()) != kMsgPrefix) {
           throw Error("message definition of " + std::string(top_type) +
                       ": expected 'MSG: <type>' after a separator, got '" + std::string(t) + "'");
         }
-        current = std::string(trim(t.substr(kMsgPrefix.size())));
+        current = std::string(trim_whitespace(t.substr(kMsgPrefix.size())));
         expect_msg_line = false;
         continue;
       }
@@ -132,7 +126,7 @@ class Md5Computer {
  private:
   void add_line(const std::string& type, std::string_view package, std::string_view line, int depth,
                 std::string& constants, std::string& fields) {
-    const std::string_view clean = trim(line.substr(0, line.find('#')));
+    const std::string_view clean = trim_whitespace(line.substr(0, line.find('#')));
     if (clean.empty()) return;
     const auto tokens = split_whitespace(clean);
     const std::string_view field_type = tokens[0];
@@ -144,12 +138,12 @@ class Md5Computer {
         // A string constant is everything after '=' on the original line, '#' included.
         const auto raw_eq = line.find('=');
         const auto type_end = line.find(field_type) + field_type.size();
-        name = std::string(trim(line.substr(type_end, raw_eq - type_end)));
-        value = std::string(trim(line.substr(raw_eq + 1)));
+        name = std::string(trim_whitespace(line.substr(type_end, raw_eq - type_end)));
+        value = std::string(trim_whitespace(line.substr(raw_eq + 1)));
       } else {
         const auto type_end = clean.find(field_type) + field_type.size();
-        name = std::string(trim(clean.substr(type_end, eq - type_end)));
-        value = std::string(trim(clean.substr(eq + 1)));
+        name = std::string(trim_whitespace(clean.substr(type_end, eq - type_end)));
+        value = std::string(trim_whitespace(clean.substr(eq + 1)));
       }
       if (name.empty()) throw Error("message definition of " + type + ": bad constant line");
       constants += std::string(field_type) + " " + name + "=" + value + "\n";

@@ -2,10 +2,11 @@
 
 #include <limits>
 
+#include "core/time.hpp"
+
 namespace livod::io::rosbag {
 
 RosTime RosTime::from_ns(std::int64_t ns) {
-  constexpr std::int64_t kNsPerSecond = 1'000'000'000;
   if (ns < 0 || ns / kNsPerSecond > std::numeric_limits<std::uint32_t>::max()) {
     throw Error("ROS time out of range (needs 0 <= t < 2^32 s): " + std::to_string(ns) + " ns");
   }

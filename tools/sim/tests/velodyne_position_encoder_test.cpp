@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 
+#include "core/units.hpp"
 #include "drivers/velodyne/position_packet.hpp"
 #include "drivers/velodyne/wire.hpp"
 
@@ -17,7 +18,6 @@ namespace {
 
 namespace vel = drivers::velodyne;
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kGyroLsbRadS = vel::kHdlGyroDegPerSecPerLsb * kDegToRad;
 constexpr double kAccelLsbMS2 = vel::kHdlAccelGPerLsb * kStandardGravity;
 
