@@ -61,9 +61,11 @@ function(livod_add_library name)
   if(LIVOD_UNITY_BUILD)
     # UNITY_BUILD_MODE BATCH, CMake's default batch size (8).
     set_target_properties(${name} PROPERTIES UNITY_BUILD ON)
-    # GCC warns when a class of one source holds a type from another source's anonymous
-    # namespace, which is what a batch of sources is; each source alone is checked by the others.
-    target_compile_options(${name} PRIVATE -Wno-subobject-linkage)
+    # In a batch GCC reports every class of one source that holds a type from another source's
+    # anonymous namespace (-Wsubobject-linkage); the file-by-file builds still check each source.
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+      target_compile_options(${name} PRIVATE -Wno-subobject-linkage)
+    endif()
   endif()
   target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/generated)
   target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LIBS} PRIVATE livod_warnings ${ARG_PRIVATE_LIBS})
