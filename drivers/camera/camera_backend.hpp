@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 
+#include "core/single_writer_counter.hpp"
 #include "core/spsc_ring.hpp"
 #include "drivers/camera/camera_frame.hpp"
 
@@ -58,16 +59,16 @@ class BackendStats {
  public:
   void add_frame(std::uint64_t bytes, std::int64_t rx_ns) {
     bump(frames_);
-    store(bytes_, bytes_.load(std::memory_order_relaxed) + bytes);
-    store(last_rx_ns_, rx_ns);
+    publish(bytes_, bytes_.load(std::memory_order_relaxed) + bytes);
+    publish(last_rx_ns_, rx_ns);
   }
   void add_incomplete() { bump(incomplete_); }
-  void add_gaps(std::uint64_t n) { store(gaps_, gaps_.load(std::memory_order_relaxed) + n); }
+  void add_gaps(std::uint64_t n) { publish(gaps_, gaps_.load(std::memory_order_relaxed) + n); }
   void add_convert_error() { bump(convert_errors_); }
   void add_control_error() { bump(control_errors_); }
   void add_trigger() { bump(triggers_); }
-  void set_exposure(Nanoseconds e) { store(exposure_ns_, e.count()); }
-  void set_gain(double g) { store(gain_, g); }
+  void set_exposure(Nanoseconds e) { publish(exposure_ns_, e.count()); }
+  void set_gain(double g) { publish(gain_, g); }
 
   [[nodiscard]] CameraBackendCounters snapshot() const {
     const auto get = [](const auto& a) { return a.load(std::memory_order_relaxed); };
@@ -86,14 +87,6 @@ class BackendStats {
   }
 
  private:
-  template <class T>
-  static void store(std::atomic<T>& a, T v) {
-    a.store(v, std::memory_order_relaxed);
-  }
-  static void bump(std::atomic<std::uint64_t>& a) {
-    a.store(a.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  }
-
   alignas(kCacheLineBytes) std::atomic<std::uint64_t> frames_{0};
   std::atomic<std::uint64_t> bytes_{0};
   std::atomic<std::uint64_t> incomplete_{0};

@@ -6,7 +6,7 @@
 #include <cerrno>
 #include <utility>
 
-#include "drivers/capture/single_writer_counter.hpp"
+#include "core/single_writer_counter.hpp"
 
 namespace livod::drivers::capture {
 

@@ -6,7 +6,7 @@
 #include <exception>
 #include <utility>
 
-#include "drivers/capture/single_writer_counter.hpp"
+#include "core/single_writer_counter.hpp"
 
 namespace livod::drivers::capture {
 

@@ -8,13 +8,13 @@
 #include <span>
 #include <vector>
 
+#include "core/little_endian.hpp"
+
 namespace livod::livox {
 
 template <class T>
 T read_le(std::span<const std::byte> data, std::size_t offset) {
-  T value;
-  std::memcpy(&value, data.data() + offset, sizeof(T));  // x86/ARM little-endian hosts
-  return value;
+  return load_le<T>(data.data() + offset);
 }
 
 template <class T>

@@ -5,14 +5,14 @@
 #include <cstring>
 #include <numbers>
 
+#include "core/little_endian.hpp"
 #include "core/units.hpp"
-#include "drivers/ouster/wire_load.hpp"
 
 namespace livod::drivers::ouster {
 namespace {
 
 Eigen::Vector3d load_vec3f(const std::byte* p) {
-  return {load<float>(p), load<float>(p + 4), load<float>(p + 8)};
+  return {load_le<float>(p), load_le<float>(p + 4), load_le<float>(p + 8)};
 }
 
 constexpr std::size_t kNmeaTimestampSize = 8;
@@ -21,9 +21,9 @@ PacketError parse_legacy(std::span<const std::byte> bytes, ImuPacket& out) {
   if (bytes.size() != kLegacyImuPacketSize) return PacketError::kWrongSize;
   const std::byte* p = bytes.data();
   ImuMeasurement& m = out.measurements[0];
-  m.sys_timestamp_ns = load<std::uint64_t>(p);
-  m.accel_timestamp_ns = load<std::uint64_t>(p + 8);
-  m.timestamp_ns = load<std::uint64_t>(p + 16);  // gyro_ts
+  m.sys_timestamp_ns = load_le<std::uint64_t>(p);
+  m.accel_timestamp_ns = load_le<std::uint64_t>(p + 8);
+  m.timestamp_ns = load_le<std::uint64_t>(p + 16);  // gyro_ts
   m.measurement_id = 0;
   m.accel_m_s2 = load_vec3f(p + 24) * kStandardGravity;
   m.gyro_rad_s = load_vec3f(p + 36) * kDegToRad;
@@ -52,7 +52,7 @@ PacketError parse_accel32_gyro32_nmea(std::span<const std::byte> bytes, const Pa
   if (out.header.packet_type != 2) return PacketError::kWrongPacketType;
 
   const std::byte* p = bytes.data();
-  out.nmea_timestamp_ns = load<std::uint64_t>(p + kPacketHeaderSize);
+  out.nmea_timestamp_ns = load_le<std::uint64_t>(p + kPacketHeaderSize);
   const char* sentence = reinterpret_cast<const char*>(p + kPacketHeaderSize + kNmeaTimestampSize);
   std::size_t len = kNmeaBlockSize - kNmeaTimestampSize;
   while (len > 0 && sentence[len - 1] == '\0') --len;
@@ -61,11 +61,11 @@ PacketError parse_accel32_gyro32_nmea(std::span<const std::byte> bytes, const Pa
   const std::byte* meas = p + kPacketHeaderSize + kNmeaBlockSize;
   for (std::size_t i = 0; i < count; ++i, meas += kImuMeasurementSize) {
     ImuMeasurement& m = out.measurements[i];
-    m.timestamp_ns = load<std::uint64_t>(meas);
+    m.timestamp_ns = load_le<std::uint64_t>(meas);
     m.accel_timestamp_ns = m.timestamp_ns;
     m.sys_timestamp_ns = 0;
-    m.measurement_id = load<std::uint16_t>(meas + 8);
-    const std::uint16_t status = load<std::uint16_t>(meas + 10);
+    m.measurement_id = load_le<std::uint16_t>(meas + 8);
+    const std::uint16_t status = load_le<std::uint16_t>(meas + 10);
     m.accel_m_s2 = load_vec3f(meas + 12);  // already m/s^2
     m.gyro_rad_s = load_vec3f(meas + 24);  // already rad/s
     m.valid = (status & 1U) != 0 && m.accel_m_s2.allFinite() && m.gyro_rad_s.allFinite();

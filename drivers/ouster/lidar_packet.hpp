@@ -8,9 +8,9 @@
 #include <cstring>
 #include <span>
 
+#include "core/little_endian.hpp"
 #include "drivers/ouster/packet_format.hpp"
 #include "drivers/ouster/profile.hpp"
-#include "drivers/ouster/wire_load.hpp"
 
 namespace livod::drivers::ouster {
 
@@ -26,26 +26,26 @@ class LidarPacket {
   [[nodiscard]] std::uint32_t columns() const { return format_->columns_per_packet; }
 
   [[nodiscard]] std::uint64_t column_timestamp_ns(std::uint32_t col) const {
-    return load<std::uint64_t>(column(col));
+    return load_le<std::uint64_t>(column(col));
   }
   [[nodiscard]] std::uint16_t measurement_id(std::uint32_t col) const {
-    return load<std::uint16_t>(column(col) + 8);
+    return load_le<std::uint16_t>(column(col) + 8);
   }
   // LEGACY: the 32-bit column footer (0xFFFFFFFF valid); otherwise the 16-bit header status.
   [[nodiscard]] std::uint32_t column_status(std::uint32_t col) const {
     const std::byte* c = column(col);
-    return format_->legacy_lidar() ? load<std::uint32_t>(c + format_->column_size - 4)
-                                   : load<std::uint16_t>(c + 10);
+    return format_->legacy_lidar() ? load_le<std::uint32_t>(c + format_->column_size - 4)
+                                   : load_le<std::uint16_t>(c + 10);
   }
   [[nodiscard]] bool column_valid(std::uint32_t col) const {
     return (column_status(col) & 1U) != 0;
   }
   // Per-column frame id and encoder count exist only in LEGACY packets (0 otherwise).
   [[nodiscard]] std::uint16_t column_frame_id(std::uint32_t col) const {
-    return format_->legacy_lidar() ? load<std::uint16_t>(column(col) + 10) : 0;
+    return format_->legacy_lidar() ? load_le<std::uint16_t>(column(col) + 10) : 0;
   }
   [[nodiscard]] std::uint32_t column_encoder_count(std::uint32_t col) const {
-    return format_->legacy_lidar() ? load<std::uint32_t>(column(col) + 12) : 0;
+    return format_->legacy_lidar() ? load_le<std::uint32_t>(column(col) + 12) : 0;
   }
 
   // Start of the channel block of row `px` in column `col`.

@@ -3,8 +3,8 @@
 #include <bit>
 #include <cstring>
 
+#include "core/little_endian.hpp"
 #include "drivers/ouster/crc64.hpp"
-#include "drivers/ouster/wire_load.hpp"
 
 namespace livod::drivers::ouster {
 namespace {
@@ -100,12 +100,12 @@ PacketHeader read_packet_header(std::span<const std::byte> bytes, HeaderType typ
     // type 8 b, init_id 24 b, frame_id 32 b at bytes 4-7, alert byte 8, serial at bits 88-127.
     h.packet_type = static_cast<std::uint8_t>(p[0]);
     h.init_id = static_cast<std::uint32_t>(load_bytes_le(p + 1, 3));
-    h.frame_id = load<std::uint32_t>(p + 4);
+    h.frame_id = load_le<std::uint32_t>(p + 4);
     h.alert_flags = static_cast<std::uint8_t>(p[8]);
     h.prod_sn = load_bytes_le(p + 11, 5);
   } else {
-    h.packet_type = load<std::uint16_t>(p);
-    h.frame_id = load<std::uint16_t>(p + 2);
+    h.packet_type = load_le<std::uint16_t>(p);
+    h.frame_id = load_le<std::uint16_t>(p + 2);
     h.init_id = static_cast<std::uint32_t>(load_bytes_le(p + 4, 3));
     h.prod_sn = load_bytes_le(p + 7, 5);
     h.alert_flags = static_cast<std::uint8_t>(p[12]);
@@ -141,7 +141,7 @@ PacketKind classify_packet(std::span<const std::byte> bytes, const PacketFormat&
 bool crc_matches(std::span<const std::byte> bytes) {
   if (bytes.size() < 8) return false;
   const std::size_t body = bytes.size() - 8;
-  return crc64_xz(bytes.first(body)) == load<std::uint64_t>(bytes.data() + body);
+  return crc64_xz(bytes.first(body)) == load_le<std::uint64_t>(bytes.data() + body);
 }
 
 PacketError check_zone_packet(std::span<const std::byte> bytes, const PacketFormat& format,
