@@ -69,6 +69,11 @@ struct LioParams {
   double voxel_size = 0.5;          // root voxel edge (m)
   int max_layer = 2;                // octree depth below the root voxel
   int max_points_num = 50;          // a plane freezes after this many points
+  // A plane node stores at most this many points (their covariances give the plane's). Past them,
+  // while max_points_num is larger, the plane is refitted from the moments of all its points with
+  // that covariance scaled down (VoxelMap's max_cov_points_size): more points per plane at the
+  // memory of a frozen node.
+  int max_cov_points = 50;
   std::vector<int> layer_init_num = {5, 5, 5, 5, 5};  // points to fit a plane, per layer
   int plane_update_points = 5;    // new points that trigger a plane refit (hard-coded upstream)
   int point_filter_num = 1;       // keep one point in n (lio/point_filter.hpp)

@@ -138,6 +138,13 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
   choose("lio.filter_size_surf", lio.filter_size_surf, 0.1,
          "smallest downsampling cell (FAST-LIVO2); the point budget grows it where a scan has more "
          "points");
+  // A plane seen again and again (a near wall, the road) averages the range noise of many scans
+  // instead of freezing on its first 50 points, at a frozen node's memory past the stored ones
+  // (map/voxel_map.hpp): no model lost accuracy, the corridor pair and the streets gained
+  // (docs/estimator.md "Map").
+  choose("lio.max_points_num", lio.max_points_num, kDefaultPlanePoints,
+         "points a plane refines on before it freezes (FAST-LIVO2: 50; past max_cov_points from "
+         "their moments)");
   if (!facts) {
     choose("lio.point_filter_num", lio.point_filter_num, 1,
            name + " has no model facts: every point, the point budget bounds the cost");

@@ -50,7 +50,8 @@ void read_lio(MapReader& m, estimator::LioParams& lio, std::set<std::string>& gi
   m.read("sigma_num", lio.sigma_num, left_open(0.0, 10.0));
   m.read("voxel_size", lio.voxel_size, closed(0.05, 10.0));
   m.read("max_layer", lio.max_layer, 0, 4);
-  m.read("max_points_num", lio.max_points_num, 5, 10000);
+  note(m.read("max_points_num", lio.max_points_num, 5, 10000), "max_points_num");
+  m.read("max_cov_points", lio.max_cov_points, 5, 10000);
   if (const auto v = m.take("layer_init_num"); v && !v->node.IsNull()) {
     // A plane fit needs at least 3 points.
     const auto numbers = parse_numbers(problems, *v, 1, 8, closed(3.0, 1000.0));

@@ -164,4 +164,25 @@ PlaneResidual plane_residual(const MapPlane& plane, const Eigen::Vector3d& p,
   return r;
 }
 
+std::optional<MapPlane> refit_map_plane(const PointMoments& moments, const MapPlane& reference,
+                                        double reference_points, double min_eigen_value) {
+  const Eigen::Vector3d mean = moments.sum / moments.count;
+  const Eigen::Matrix3d scatter = moments.outer / moments.count - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(scatter);
+  if (!(es.eigenvalues()(0) < min_eigen_value)) return std::nullopt;
+  MapPlane m = reference;
+  m.normal = es.eigenvectors().col(0);
+  // The eigenvector's sign is arbitrary: keep the reference's, so that the covariance terms
+  // that are odd in n (C_nq n) keep theirs.
+  if (m.normal.dot(reference.normal) < 0.0) m.normal = -m.normal;
+  m.center = moments.origin + mean;
+  m.d = -m.normal.dot(m.center);
+  m.extent2 = 9.0 * std::max(0.0, es.eigenvalues()(2));
+  const double scale = reference_points / moments.count;
+  for (double& c : m.cov_nn) c *= scale;
+  m.cov_nq_n *= scale;
+  m.n_cov_qq_n *= scale;
+  return m;
+}
+
 }  // namespace livod::estimator

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <vector>
 
 namespace livod::estimator {
@@ -51,6 +52,31 @@ struct MapPlane {
   double n_cov_qq_n = 0.0;                             // n^T C_qq n
 };
 MapPlane map_plane(const Plane& plane);
+
+// Running first and second moments of points about a fixed origin near them (the sums stay small,
+// so the scatter keeps its precision far from the world origin): what a map node keeps of its
+// points once it stores no more of them (LioParams::max_cov_points).
+struct PointMoments {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  double count = 0.0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();    // of p - origin
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();  // of (p - origin)(p - origin)^T
+  void add(const Eigen::Vector3d& p) {
+    const Eigen::Vector3d e = p - origin;
+    count += 1.0;
+    sum += e;
+    outer.noalias() += e * e.transpose();
+  }
+};
+
+// The plane of every point in `moments`, with the uncertainty of `reference` - a plane fitted
+// (fit_plane) from `reference_points` of those points - scaled by reference_points /
+// moments.count: to first order the plane of N points like the reference's is known N / n times
+// better (both blocks of the Jacobian above scale as 1 / N), and the normal moves too little for
+// the covariance's orientation to change. nullopt when the points are no longer planar (smallest
+// eigenvalue >= min_eigen_value).
+std::optional<MapPlane> refit_map_plane(const PointMoments& moments, const MapPlane& reference,
+                                        double reference_points, double min_eigen_value);
 
 // Signed point-to-plane distance and its variance (plane uncertainty + point uncertainty):
 //   sigma^2 = J cov J^T + n^T S_p n,  J = [(p - q)^T, -n^T]

@@ -2,7 +2,9 @@
 
 #include "estimator/grid_index.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace livod::estimator {
 
@@ -25,7 +27,15 @@ struct VoxelMap::Node {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // of the node's cube
   double half = 0.0;                                 // half edge of the cube
   std::vector<CovPoint> points;                      // kept until the node freezes
-  std::uint32_t batch = kNoBatch;                    // roots: index in the insert() under way
+  // A plane past LioParams::max_cov_points: the moments of all its points instead of the points,
+  // and the plane they were fitted to last (its covariance).
+  struct Moments {
+    PointMoments moments;
+    MapPlane reference;
+    double reference_points = 0.0;
+  };
+  std::unique_ptr<Moments> beyond;
+  std::uint32_t batch = kNoBatch;  // roots: index in the insert() under way
 
   int octant(const Eigen::Vector3d& p) const {
     return (p.x() >= center.x() ? 1 : 0) | (p.y() >= center.y() ? 2 : 0) |
@@ -39,7 +49,8 @@ struct VoxelMap::Node {
     c.planes = plane.is_plane && !split ? 1 : 0;
     c.frozen_nodes = frozen ? 1 : 0;
     c.stored_points = static_cast<std::int64_t>(points.size());
-    c.bytes = static_cast<std::int64_t>(sizeof(Node) + points.capacity() * sizeof(CovPoint));
+    c.bytes = static_cast<std::int64_t>(sizeof(Node) + points.capacity() * sizeof(CovPoint) +
+                                        (beyond ? sizeof(Moments) : 0));
     return c;
   }
 
@@ -92,6 +103,34 @@ struct VoxelMap::Node {
     new_points = 0;
   }
 
+  void freeze() {
+    frozen = true;
+    points.clear();
+    points.shrink_to_fit();
+    beyond.reset();
+  }
+
+  // A plane that stores no more points goes on from the moments of all of them: refitted at every
+  // tenth more (the plane of many points moves little), final at max_points_num. One that stops
+  // being planar (a passing object, drift) freezes as it was.
+  void take_beyond(const CovPoint& p, const LioParams& lio) {
+    beyond->moments.add(p.p);
+    ++new_points;
+    const bool last = beyond->moments.count >= lio.max_points_num;
+    if (last || new_points > std::max(lio.plane_update_points,
+                                      static_cast<int>(beyond->moments.count) / 10)) {
+      const std::optional<MapPlane> refit = refit_map_plane(
+          beyond->moments, beyond->reference, beyond->reference_points, lio.min_eigen_value);
+      new_points = 0;
+      if (!refit) {
+        freeze();
+        return;
+      }
+      plane = *refit;
+    }
+    if (last) freeze();
+  }
+
   // `change` receives what the insert changed in the map's counts.
   void insert(const CovPoint& p, const LioParams& lio, Counts& change) {
     if (split) {
@@ -100,6 +139,10 @@ struct VoxelMap::Node {
     }
     if (frozen) return;  // the plane is final; FAST-LIVO2 behaviour (bounded memory)
     const OwnChange own_change(*this, change);
+    if (beyond) {
+      take_beyond(p, lio);
+      return;
+    }
     points.push_back(p);
     ++new_points;
     if (!initialized) {
@@ -119,7 +162,26 @@ struct VoxelMap::Node {
     }
     if (static_cast<int>(points.size()) >= lio.max_points_num) {
       fit(lio);
-      frozen = true;
+      freeze();
+      return;
+    }
+    if (static_cast<int>(points.size()) >= lio.max_cov_points) {
+      // Store no more: the plane of the stored points (and its covariance) goes on from their
+      // moments. Points that are not planar split or freeze, as at any refit.
+      fit(lio);
+      if (!plane.is_plane) {
+        if (layer < lio.max_layer) {
+          split_into_children(lio, change);
+        } else {
+          freeze();
+        }
+        return;
+      }
+      beyond = std::make_unique<Moments>();
+      beyond->moments.origin = center;
+      for (const CovPoint& q : points) beyond->moments.add(q.p);
+      beyond->reference = plane;
+      beyond->reference_points = beyond->moments.count;
       points.clear();
       points.shrink_to_fit();
     }

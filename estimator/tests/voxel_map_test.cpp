@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <random>
 
 namespace livod::estimator {
@@ -51,6 +52,51 @@ TEST(VoxelMap, MatchesPointsToTheirPlaneAndRejectsOutliers) {
   EXPECT_FALSE(vm.match({0.3, 0.7, 0.2}, cov, m));
   // In empty space.
   EXPECT_FALSE(vm.match({0.0, 0.0, 1.5}, cov, m));
+}
+
+// A plane seen many times (a near wall seen head-on, 2 cm range noise): FAST-LIVO2 freezes it on
+// its first max_points_num points. With a larger max_points_num it keeps learning past the
+// max_cov_points it stores, from their moments, at a frozen node's memory.
+TEST(VoxelMap, APlanePastItsStoredPointsKeepsLearningFromTheirMoments) {
+  constexpr int kScans = 40;
+  constexpr int kPointsPerScan = 25;
+  const auto offset_rms = [&](int max_points_num, bool check_memory) {
+    double sum2 = 0.0;
+    constexpr int kTrials = 30;
+    for (int trial = 0; trial < kTrials; ++trial) {
+      LioParams lio;
+      lio.max_points_num = max_points_num;
+      lio.max_cov_points = 50;
+      MapParams map;
+      VoxelMap vm(lio, map);
+      std::mt19937 rng(100 + trial);
+      // z = 0.1 inside the root voxel [0, 0.5)^3.
+      for (int scan = 0; scan < kScans; ++scan) {
+        vm.insert(
+            sample_plane(rng, {0.02, 0.02, 0.1}, {0.46, 0, 0}, {0, 0.46, 0}, kPointsPerScan, 0.02));
+        const VoxelMapStats s = vm.stats();
+        if (check_memory) {
+          EXPECT_LE(s.stored_points, 50u) << scan;
+          if ((scan + 1) * kPointsPerScan > 50) {
+            // Past the stored points: none kept, the plane not frozen until max_points_num.
+            EXPECT_EQ(s.stored_points, 0u) << scan;
+            EXPECT_EQ(s.frozen_nodes, (scan + 1) * kPointsPerScan >= max_points_num ? 1u : 0u)
+                << scan;
+          }
+        }
+      }
+      PlaneMatch m;
+      EXPECT_TRUE(vm.match({0.25, 0.25, 0.1}, Eigen::Matrix3d::Identity() * 1e-6, m));
+      sum2 += m.distance * m.distance;
+    }
+    return std::sqrt(sum2 / kTrials);
+  };
+  const double frozen_at_50 = offset_rms(50, false);
+  const double frozen_at_1000 = offset_rms(kScans * kPointsPerScan, true);
+  // 2 cm / sqrt(N): about 2.8 mm on 50 points, 0.6 mm on 1000.
+  EXPECT_GT(frozen_at_50, 0.0015);
+  EXPECT_LT(frozen_at_1000, 0.001);
+  EXPECT_LT(frozen_at_1000, 0.4 * frozen_at_50);
 }
 
 TEST(VoxelMap, NeighbourFallbackUsesVoxelUnits) {

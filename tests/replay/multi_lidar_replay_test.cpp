@@ -113,16 +113,11 @@ TEST(MultiLidarReplay, Vlp16PlusAviaStreetBeatsBothLidarsAlone) {
 }
 
 // The corridor with side rooms: the forward Avia sees uniform walls, floor and ceiling, and faces
-// along x only as slivers through the doorways; the Avia looking left sees into the rooms.
-// Re-derived for the per-model defaults (issue 15) over seeds 1-3 instead of seed 1 alone: with
-// the Avia's default bearing noise (0.14 deg, half its divergence; FAST-LIVO2's 0.05 deg before)
-// the forward Avia alone on seed 1 is flagged degenerate on 3 % of frames only (23 % with
-// 0.05 deg, same capture and build), while on seeds 2 and 3 it still is on 21-22 % - one seed no
-// longer shows the corridor's degeneracy. Pooled over the three seeds (measured: forward alone 72
-// of 474 frames, 15 %; the pair 53 of 945, 5.6 %) the sideways LiDAR more than halves the share
-// of degenerate frames, which is what issue 10 asks. The ATE goes either way per seed (pair 8.3,
-// 9.4, 7.8 mm; forward alone 6.2, 6.4, 11.0 mm), as it did before the defaults (docs/estimator.md
-// "Several LiDARs"): the check on accuracy is that the pair's mean stays comparable.
+// along x only as slivers through the doorways; the Avia looking left sees into the rooms. Pooled
+// over seeds 1-3: under earlier defaults one seed alone showed the forward Avia degenerate on 3 %
+// of its frames only. Measured with the current defaults: 11.1 % of the pair's frames (33-37 of
+// ~315 per seed) against 23.8 % of the forward Avia's alone - the sideways LiDAR halves the
+// share of degenerate frames, which is what issue 10 asks.
 TEST(MultiLidarReplay, SidewaysLidarConstrainsTheCorridor) {
   const sim::Scenario scenario = sim::make_scenario("corridor_side_rooms_dual_avia");
   if (!test::scenario_runnable(scenario)) GTEST_SKIP() << "Avia not simulated";
@@ -156,11 +151,12 @@ TEST(MultiLidarReplay, SidewaysLidarConstrainsTheCorridor) {
   EXPECT_GT(forward_share, 0.12);  // the forward LiDAR alone: degenerate in the plain stretches
   EXPECT_LT(both_share, 0.6 * forward_share);
   // With the Avia's map points carrying their sensor noise only (lio.map_pose_covariance false,
-  // its model's default since issue 15) both improve, the single LiDAR more (pair 7.0 / 8.2 /
-  // 7.0 mm against 8.3 / 9.4 / 7.8 with the pose term; forward alone 5.1 / 5.1 / 5.8 against
-  // 6.2 / 6.4 / 11.0): the pair stays within the room target and within 1.5x of the single
-  // LiDAR (1.43x measured; 1.25x before).
-  EXPECT_LE(both_ate, 1.5 * forward_ate);
+  // its model's default since issue 15) both improved, the single LiDAR more (pair 7.9 / 8.2 /
+  // 7.0 mm, forward alone 5.1 / 5.1 / 5.8: 1.43x). The side Avia fills a near wall's voxels with
+  // 50 points in one or two scans, and a plane froze on them; with planes refining on up to 500
+  // points (lio.max_points_num, the daemon's default since) the pair is 6.1 / 6.1 / 6.0 mm against
+  // 4.9 / 5.3 / 6.3 (1.11x; docs/estimator.md "Corridor"). Issue 10 asks for <= 1x: not met yet.
+  EXPECT_LE(both_ate, 1.25 * forward_ate);
   EXPECT_LT(both_ate, 0.01);
 }
 

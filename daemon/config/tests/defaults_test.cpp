@@ -75,7 +75,8 @@ TEST(ConfigDefaults, EstimatorDefaultsAreTheAviaValues) {
   EXPECT_DOUBLE_EQ(e.lio.sigma_num, 3.0);
   EXPECT_DOUBLE_EQ(e.lio.voxel_size, 0.5);
   EXPECT_EQ(e.lio.max_layer, 2);
-  EXPECT_EQ(e.lio.max_points_num, 50);
+  EXPECT_EQ(e.lio.max_points_num, kDefaultPlanePoints);  // FAST-LIVO2's 50 otherwise
+  EXPECT_EQ(e.lio.max_cov_points, 50);
   EXPECT_EQ(e.lio.layer_init_num, (std::vector<int>{5, 5, 5, 5, 5}));
   EXPECT_EQ(e.lio.point_filter_num, 1);
   EXPECT_EQ(e.lio.point_budget, kDefaultPointBudget);

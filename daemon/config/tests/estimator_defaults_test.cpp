@@ -103,7 +103,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   const auto r = load(ouster_config(
       "OS1-128",
       "{lio: {point_filter_num: 1, point_budget: 0, dept_err: 0.03, beam_err_deg: 0.2, "
-      "filter_size_surf: 0.3, map_pose_covariance: true}}"));
+      "filter_size_surf: 0.3, map_pose_covariance: true, max_points_num: 50}}"));
   ASSERT_TRUE(r.ok()) << dump(r);
   const auto& lio = r.config.estimator.lio;
   EXPECT_EQ(lio.point_filter_num, 1);
@@ -112,6 +112,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   EXPECT_DOUBLE_EQ(lio.beam_err_deg, 0.2);
   EXPECT_DOUBLE_EQ(lio.filter_size_surf, 0.3);
   EXPECT_TRUE(lio.map_pose_covariance);
+  EXPECT_EQ(lio.max_points_num, 50);
   for (const auto& c : r.config.estimator_choices) {
     EXPECT_EQ(c.reason, "set in the configuration") << c.key;
   }
@@ -120,6 +121,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   ASSERT_TRUE(one.ok()) << dump(one);
   EXPECT_DOUBLE_EQ(one.config.estimator.lio.dept_err, 0.03);
   EXPECT_EQ(one.config.estimator.lio.point_filter_num, 4);
+  EXPECT_EQ(one.config.estimator.lio.max_points_num, kDefaultPlanePoints);
 }
 
 // The pose uncertainty goes into the map points of spinning LiDARs with sparse rings only
@@ -159,6 +161,7 @@ TEST(EstimatorDefaults, UnknownModelGetsTheBudgetAndSaysWhy) {
   const auto choices = estimator_settings_for(std::nullopt, "XYZ-99", given, params);
   EXPECT_EQ(params.lio.point_budget, kDefaultPointBudget);
   EXPECT_EQ(params.lio.point_filter_num, 1);
+  EXPECT_EQ(params.lio.max_points_num, kDefaultPlanePoints);  // whatever the model
   EXPECT_DOUBLE_EQ(params.lio.dept_err, estimator::LioParams{}.dept_err);
   bool explained = false;
   for (const auto& c : choices) {
@@ -179,6 +182,7 @@ TEST(EstimatorDefaults, CheckConfigPrintsTheEffectiveValuesAndWhy) {
   EXPECT_NE(summary.find("lio.dept_err 0.03"), std::string::npos) << summary;
   EXPECT_NE(summary.find("set in the configuration"), std::string::npos) << summary;
   EXPECT_NE(summary.find("lio.point_budget 8000"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("lio.max_points_num 500"), std::string::npos) << summary;
   ASSERT_NE(choice(r.config, "lio.beam_err_deg"), nullptr);
   EXPECT_NE(choice(r.config, "lio.beam_err_deg")->reason.find("divergence"), std::string::npos);
 }
