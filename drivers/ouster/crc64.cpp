@@ -1,14 +1,11 @@
 #include "drivers/ouster/crc64.hpp"
 
 #include <array>
-#include <bit>
-#include <cstring>
+
+#include "core/little_endian.hpp"
 
 namespace livod::drivers::ouster {
 namespace {
-
-static_assert(std::endian::native == std::endian::little,
-              "the word-at-a-time loop assumes a little-endian host");
 
 constexpr std::uint64_t kReflectedPolynomial = 0xC96C5795D7870F42ULL;
 
@@ -44,9 +41,7 @@ std::uint64_t crc64_xz(std::span<const std::byte> bytes) {
   const std::byte* p = bytes.data();
   std::size_t n = bytes.size();
   while (n >= 8) {
-    std::uint64_t word = 0;
-    std::memcpy(&word, p, sizeof(word));  // little-endian host: byte 0 in the low bits
-    crc ^= word;
+    crc ^= load_le<std::uint64_t>(p);  // byte 0 in the low bits
     crc = kTables[7][crc & 0xFFU] ^ kTables[6][(crc >> 8) & 0xFFU] ^
           kTables[5][(crc >> 16) & 0xFFU] ^ kTables[4][(crc >> 24) & 0xFFU] ^
           kTables[3][(crc >> 32) & 0xFFU] ^ kTables[2][(crc >> 40) & 0xFFU] ^

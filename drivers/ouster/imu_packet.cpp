@@ -1,9 +1,6 @@
 #include "drivers/ouster/imu_packet.hpp"
 
-#include <bit>
 #include <cmath>
-#include <cstring>
-#include <numbers>
 
 #include "core/little_endian.hpp"
 #include "core/units.hpp"

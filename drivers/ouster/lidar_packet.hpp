@@ -5,7 +5,6 @@
 // copied or allocated.
 
 #include <cstdint>
-#include <cstring>
 #include <span>
 
 #include "core/little_endian.hpp"

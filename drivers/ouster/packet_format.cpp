@@ -1,8 +1,5 @@
 #include "drivers/ouster/packet_format.hpp"
 
-#include <bit>
-#include <cstring>
-
 #include "core/little_endian.hpp"
 #include "drivers/ouster/crc64.hpp"
 

@@ -9,9 +9,10 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <optional>
 #include <string_view>
+
+#include "core/little_endian.hpp"
 
 namespace livod::drivers::ouster {
 
@@ -76,8 +77,7 @@ struct ProfileLayout {
 // block + byte_offset: every field's load stays inside the packet because each channel block is
 // followed by at least the 4-byte column status (LEGACY) or the 32-byte packet footer.
 [[nodiscard]] inline std::uint32_t read_field(const std::byte* block, const FieldLayout& f) {
-  std::uint32_t word = 0;
-  std::memcpy(&word, block + f.byte_offset, sizeof(word));  // wire is little-endian, like x86/ARM
+  const auto word = load_le<std::uint32_t>(block + f.byte_offset);
   return ((word >> f.shift) & f.mask) << f.upshift;
 }
 
