@@ -179,7 +179,7 @@ PipelineCounters LioPipeline::counters() const {
   PipelineCounters c = counters_;
   const SyncCounters& s = sync_.counters();
   c.images_in = s.images_in + images_unused_;
-  c.images_unused = images_unused_;
+  c.images_unused = images_unused_ + s.images_before_map;
   c.images_late = s.images_late;
   c.images_dropped = s.images_out_of_order + s.images_queue_overflow;
   c.images_rejected = images_rejected_;

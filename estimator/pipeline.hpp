@@ -144,7 +144,8 @@ struct PipelineCounters {
   std::uint64_t frames_without_update = 0;
   std::uint64_t degenerate_frames = 0;
   std::uint64_t images_in = 0;
-  std::uint64_t images_unused = 0;    // no camera configured or VIO disabled
+  // No camera configured, VIO disabled, before the IMU initialisation or the first scan's end.
+  std::uint64_t images_unused = 0;
   std::uint64_t images_late = 0;      // arrived after the estimator passed their time
   std::uint64_t images_dropped = 0;   // out of order or queue overflow
   std::uint64_t images_rejected = 0;  // wrong size or format (VioReport::problem)

@@ -139,10 +139,11 @@ std::string format_timing_text(const ReplaySummary& s) {
   if (s.vio_ms.count > 0) {
     const auto& c = s.counters;
     out += fmt::format(
-        "\nvisual update: images in {}, image groups {}, visual updates {}, late {}, dropped {}, "
-        "rejected {}; inverse exposure at the end {:.4f}\n",
-        c.images_in, c.image_groups, c.vio_updates, c.images_late, c.images_dropped,
-        c.images_rejected, s.inv_exposure);
+        "\nvisual update: images in {}, image groups {}, visual updates {}, unused (before the "
+        "first scan's end) {}, late {}, dropped {}, rejected {}; inverse exposure at the end "
+        "{:.4f}\n",
+        c.images_in, c.image_groups, c.vio_updates, c.images_unused, c.images_late,
+        c.images_dropped, c.images_rejected, s.inv_exposure);
     out += text_distribution("per image (wall)", s.vio_ms, "ms", 3);
     out += text_distribution("pyramid", s.vio_pyramid_ms, "ms", 3);
     out += text_distribution("selection", s.vio_selection_ms, "ms", 3);
@@ -211,18 +212,20 @@ std::string format_timing_json(const ReplaySummary& s) {
   out += fmt::format("  \"exported_points\": {}, \"exported_dropped\": {},\n", s.exported_points,
                      s.exported_dropped);
   out += fmt::format(
-      "  \"vio\": {{\"images_in\": {}, \"image_groups\": {}, \"updates\": {}, \"late\": {}, "
+      "  \"vio\": {{\"images_in\": {}, \"image_groups\": {}, \"updates\": {}, \"unused\": {}, "
+      "\"late\": {}, "
       "\"dropped\": {}, \"rejected\": {}, \"inv_exposure\": {}, \"ms\": {}, \"pyramid_ms\": {}, "
       "\"selection_ms\": {}, \"update_ms\": {}, \"map_ms\": {}, \"patches\": {}, "
       "\"visual_map\": {{\"points\": {}, \"observations\": {}, \"bytes\": {}, \"created\": {}, "
       "\"removed_sliding\": {}, \"removed_budget\": {}}}}},\n",
-      s.counters.images_in, s.counters.image_groups, s.counters.vio_updates, s.counters.images_late,
-      s.counters.images_dropped, s.counters.images_rejected, num(s.inv_exposure),
-      json_distribution(s.vio_ms), json_distribution(s.vio_pyramid_ms),
-      json_distribution(s.vio_selection_ms), json_distribution(s.vio_update_ms),
-      json_distribution(s.vio_map_ms), json_distribution(s.vio_patches), s.visual_map.points,
-      s.visual_map.observations, s.visual_map.bytes, s.visual_map.created,
-      s.visual_map.removed_sliding, s.visual_map.removed_budget);
+      s.counters.images_in, s.counters.image_groups, s.counters.vio_updates,
+      s.counters.images_unused, s.counters.images_late, s.counters.images_dropped,
+      s.counters.images_rejected, num(s.inv_exposure), json_distribution(s.vio_ms),
+      json_distribution(s.vio_pyramid_ms), json_distribution(s.vio_selection_ms),
+      json_distribution(s.vio_update_ms), json_distribution(s.vio_map_ms),
+      json_distribution(s.vio_patches), s.visual_map.points, s.visual_map.observations,
+      s.visual_map.bytes, s.visual_map.created, s.visual_map.removed_sliding,
+      s.visual_map.removed_budget);
   out += "  \"sensors\": [";
   for (std::size_t i = 0; i < s.sensors.size(); ++i) {
     const auto& sensor = s.sensors[i];

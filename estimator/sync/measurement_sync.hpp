@@ -13,8 +13,10 @@
 //    the rest of a cut scan waits for the next group). The pipeline runs the LIO update and
 //    then the VIO update at that one instant.
 //
-// With images enabled (enable_images), image groups are made whenever the points up to the image
-// time have arrived; a scan end becomes a lidar group only when no image is due for it. An image
+// With images enabled (enable_images), the first group is still the first whole scan (the map
+// starts from a full sweep; the images up to its end are dropped and counted, images_before_map).
+// Then image groups are made whenever the points up to the image time have arrived; a scan end
+// becomes a lidar group only when no image is due for it. An image
 // is due when it comes within image_timeout of the scan end and before the next scan would end
 // (one scan period, the scan's own span, later): then its group takes the scan's points. With no
 // image queued, the scan end waits until the data (the IMU) reaches that horizon. LIO therefore
@@ -90,8 +92,10 @@ struct SyncCounters {
   std::uint64_t imu_queue_overflow = 0;
   std::uint64_t images_in = 0;
   std::uint64_t images_out_of_order = 0;  // at or before the previous image
-  std::uint64_t images_late = 0;          // arrived after the estimator passed their time
+  std::uint64_t images_late = 0;          // arrived after the estimator passed their time (later)
   std::uint64_t images_queue_overflow = 0;
+  // Up to the first scan's end (the first group's, whenever they arrive): no map to update against.
+  std::uint64_t images_before_map = 0;
   std::uint64_t groups = 0;
   std::uint64_t image_groups = 0;
 };
@@ -159,6 +163,7 @@ class MeasurementSync {
   MappedTime last_update_;  // the last group's update time (or the start)
   MappedTime last_imu_;     // the newest accepted sample (or the start)
   MappedTime last_image_;   // the newest accepted image
+  MappedTime map_start_;    // with images: the first group's time (the first scan's end)
   std::deque<ImuSample> imu_;
   std::deque<QueuedScan> scans_;
   std::vector<LidarQueue> lidars_;  // several LiDARs only (scans_ is then unused)

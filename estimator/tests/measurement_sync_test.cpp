@@ -222,10 +222,16 @@ TEST(MeasurementSync, ImageGroupsCutScansAtImageTimes) {
   std::vector<std::int64_t> images;
   for (std::int64_t t = 50; t < 1000; t += 100) images.push_back(t);
   const auto groups = run_rig(sync, 1100, images);
-  // One group per image up to 950 ms (the scan ending at 999 ms has arrived at 1000 ms);
-  // nothing at the scan ends (an image is always due within the timeout).
+  // The first group is the first whole scan (the map starts from a full sweep): the image before
+  // its end has nothing to update against. Then one group per image up to 950 ms (the scan ending
+  // at 999 ms has arrived at 1000 ms); nothing at the scan ends (an image is always due within the
+  // timeout).
   ASSERT_EQ(groups.size(), images.size());
-  for (std::size_t k = 0; k < groups.size(); ++k) {
+  EXPECT_EQ(groups[0].kind, MeasurementGroup::Kind::lidar);
+  EXPECT_EQ(groups[0].t_update.ns, 99 * kMs);
+  EXPECT_EQ(groups[0].scan.size(), 100U);
+  EXPECT_EQ(sync.counters().images_before_map, 1U);
+  for (std::size_t k = 1; k < groups.size(); ++k) {
     EXPECT_EQ(groups[k].kind, MeasurementGroup::Kind::image);
     EXPECT_EQ(groups[k].t_update.ns, images[k] * kMs);
     EXPECT_EQ(groups[k].image.mid_exposure.ns, images[k] * kMs);
@@ -234,12 +240,36 @@ TEST(MeasurementSync, ImageGroupsCutScansAtImageTimes) {
     ASSERT_TRUE(groups[k].imu_after);
     EXPECT_GT(groups[k].imu_after->stamp.mapped.ns, images[k] * kMs);
   }
-  // The first group holds the points up to the first image, later ones 100 ms each, taken from
-  // two scans (scan recombination).
-  EXPECT_EQ(groups[0].scan.size(), 51U);
-  EXPECT_EQ(groups[1].scan.size(), 100U);
+  // The first image group holds the points from the scan end to the image, later ones 100 ms
+  // each, taken from two scans (scan recombination).
+  EXPECT_EQ(groups[1].scan.size(), 51U);
+  EXPECT_EQ(groups[2].scan.size(), 100U);
   expect_points_partitioned(groups, 950 * kMs);
-  EXPECT_EQ(sync.counters().image_groups, images.size());
+  EXPECT_EQ(sync.counters().image_groups, images.size() - 1);
+  EXPECT_EQ(sync.counters().images_late, 0U);
+}
+
+// A camera faster than the LiDAR (20 Hz, a quarter scan off the scan ends) still waits for the
+// first whole scan; from then on every image is a group holding half a scan.
+TEST(MeasurementSync, AFastCameraStartsFromTheFirstWholeScan) {
+  MeasurementSync sync;
+  sync.enable_images(true);
+  sync.start(MappedTime(0));
+  std::vector<std::int64_t> images;
+  for (std::int64_t t = 25; t < 500; t += 50) images.push_back(t);
+  const auto groups = run_rig(sync, 600, images);
+  ASSERT_FALSE(groups.empty());
+  EXPECT_EQ(groups[0].kind, MeasurementGroup::Kind::lidar);
+  EXPECT_EQ(groups[0].scan.size(), 100U);
+  EXPECT_EQ(sync.counters().images_before_map, 2U);  // 25 and 75 ms
+  std::vector<std::int64_t> times;
+  for (std::size_t k = 1; k < groups.size(); ++k) {
+    EXPECT_EQ(groups[k].kind, MeasurementGroup::Kind::image);
+    times.push_back(groups[k].t_update.ns / kMs);
+  }
+  EXPECT_EQ(times, (std::vector<std::int64_t>{125, 175, 225, 275, 325, 375, 425, 475}));
+  expect_points_partitioned(groups, 475 * kMs);
+  EXPECT_EQ(sync.counters().images_late, 0U);
 }
 
 TEST(MeasurementSync, LidarGoesOnWhenImagesStopAndImagesResume) {
@@ -256,14 +286,14 @@ TEST(MeasurementSync, LidarGoesOnWhenImagesStopAndImagesResume) {
     (g.kind == MeasurementGroup::Kind::lidar ? lidar_ends : image_times)
         .push_back(g.t_update.ns / kMs);
   }
-  // During the gap every scan end is an update (LiDAR rate): 499 (with the rest of the scan cut
-  // at 350 ms), 599, ... 1399; 1499 waits for the 1550 ms image, due before the next scan ends,
-  // which takes its points. After the last image (1950 ms) the rest of its scan joins the next
-  // one: 2099, once the IMU is a scan period past it without an image.
-  EXPECT_EQ(lidar_ends, (std::vector<std::int64_t>{499, 599, 699, 799, 899, 999, 1099, 1199, 1299,
-                                                   1399, 2099}));
-  EXPECT_EQ(image_times,
-            (std::vector<std::int64_t>{50, 150, 250, 350, 1550, 1650, 1750, 1850, 1950}));
+  // The first scan end (99) starts the map. During the gap every scan end is an update (LiDAR
+  // rate): 499 (with the rest of the scan cut at 350 ms), 599, ... 1399; 1499 waits for the
+  // 1550 ms image, due before the next scan ends, which takes its points. After the last image
+  // (1950 ms) the rest of its scan joins the next one: 2099, once the IMU is a scan period past it
+  // without an image.
+  EXPECT_EQ(lidar_ends, (std::vector<std::int64_t>{99, 499, 599, 699, 799, 899, 999, 1099, 1199,
+                                                   1299, 1399, 2099}));
+  EXPECT_EQ(image_times, (std::vector<std::int64_t>{150, 250, 350, 1550, 1650, 1750, 1850, 1950}));
   expect_points_partitioned(groups, 2099 * kMs);
   EXPECT_EQ(groups[4].scan.size(), 149U);  // 351 .. 499 ms
 }
@@ -279,7 +309,7 @@ TEST(MeasurementSync, AScanEndIsNotSwallowedByALaterImageArrivingWithTheNextScan
   const auto groups = run_rig(sync, 2000, {50, 150, 1599, 1699}, 1, 100);
   std::vector<std::int64_t> times;
   for (const auto& g : groups) times.push_back(g.t_update.ns / kMs);
-  EXPECT_EQ(times, (std::vector<std::int64_t>{50, 150, 299, 399, 499, 599, 699, 799, 899, 999, 1099,
+  EXPECT_EQ(times, (std::vector<std::int64_t>{99, 150, 299, 399, 499, 599, 699, 799, 899, 999, 1099,
                                               1199, 1299, 1399, 1499, 1599, 1699, 1799, 1899}));
   expect_points_partitioned(groups, 1899 * kMs);
 }
@@ -296,8 +326,10 @@ TEST(MeasurementSync, ImagesUpToAScanPeriodLateAreUsed) {
   for (const auto& g : groups) {
     if (g.kind == MeasurementGroup::Kind::image) image_times.push_back(g.t_update.ns / kMs);
   }
-  EXPECT_EQ(image_times, images);
+  // All but the one before the first scan's end (counted apart, not as late).
+  EXPECT_EQ(image_times, std::vector<std::int64_t>(images.begin() + 1, images.end()));
   EXPECT_EQ(sync.counters().images_late, 0U);
+  EXPECT_EQ(sync.counters().images_before_map, 1U);
   expect_points_partitioned(groups, groups.back().t_update.ns);
 }
 
@@ -311,8 +343,8 @@ TEST(MeasurementSync, ASlowCameraLeavesScanEndsToLio) {
   for (const auto& g : groups) times.push_back(g.t_update.ns / kMs);
   // Scan ends more than the timeout before the next image are LIO updates at LiDAR rate; the
   // rest of a cut scan joins the next one.
-  EXPECT_EQ(times, (std::vector<std::int64_t>{150, 299, 399, 550, 699, 799, 950, 1099, 1199, 1350,
-                                              1499, 1599}));
+  EXPECT_EQ(times, (std::vector<std::int64_t>{99, 150, 299, 399, 550, 699, 799, 950, 1099, 1199,
+                                              1350, 1499, 1599}));
   expect_points_partitioned(groups, 1599 * kMs);
 }
 

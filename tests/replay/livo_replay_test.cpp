@@ -137,8 +137,10 @@ daemon::replay::ReplayResult* LivoReplay::folder_result_ = nullptr;
 TEST_F(LivoReplay, FolderRunsTheVisualUpdate) {
   const auto& s = folder_result_->summary;
   EXPECT_EQ(s.counters.images_in, 80U);
-  // Images before the IMU initialisation are not used; after it every pose is at an image time.
-  EXPECT_EQ(s.counters.image_groups, s.frames);
+  // Images before the IMU initialisation and the first scan's end are not used; the first pose
+  // is that scan's end (the map's first sweep), every later one at an image time.
+  EXPECT_EQ(s.counters.image_groups + 1, s.frames);
+  EXPECT_GT(s.counters.images_unused, 0U);
   EXPECT_GE(s.counters.image_groups, 75U);
   EXPECT_GE(s.counters.vio_updates, 70U);
   EXPECT_EQ(s.counters.images_rejected, 0U);
@@ -149,6 +151,10 @@ TEST_F(LivoReplay, FolderRunsTheVisualUpdate) {
   // The report says what the camera did.
   const std::string timing = test::read_file(folder_result_->timing_text);
   EXPECT_NE(timing.find("visual update: images in 80"), std::string::npos) << timing;
+  EXPECT_NE(timing.find("unused (before the first scan's end) " +
+                        std::to_string(s.counters.images_unused)),
+            std::string::npos)
+      << timing;
   EXPECT_NE(test::read_file(folder_result_->timing_json)
                 .find("\"image_groups\": " + std::to_string(s.counters.image_groups)),
             std::string::npos);

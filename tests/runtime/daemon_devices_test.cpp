@@ -561,9 +561,11 @@ TEST_F(DaemonCamera, AGigECameraFeedsTheVisualUpdateAndComesBackAfterItIsKilled)
   std::printf("[live-gige] ATE rmse: live LIVO %.1f mm (%zu poses), LiDAR-only replay %.1f mm\n",
               1e3 * live_eval.ape.rmse, live_eval.ape_m.size(), 1e3 * replay_eval.ape.rmse);
   EXPECT_GE(live_eval.ape_m.size(), replayed.summary.frames / 2);
-  // The handheld bound of the replay accuracy tests: image groups cut the scans at image times,
-  // so LIO's input differs from the replay's (1.9 to 14.5 mm measured over four runs).
-  EXPECT_LE(live_eval.ape.rmse, 0.03);
+  // Image groups cut the scans at image times (half scans at 20 Hz), so LIO's input differs from
+  // the replay's: 1.3 to 1.5 mm over four runs beside three busy loops. 8 to 51 mm when the map
+  // started from the slice before the first image (docs/estimator.md "Measurement groups and
+  // time").
+  EXPECT_LE(live_eval.ape.rmse, 0.006);
 }
 
 }  // namespace
