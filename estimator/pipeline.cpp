@@ -137,6 +137,7 @@ void LioPipeline::add_imu(const ImuSample& sample) {
 
 void LioPipeline::add_scan(LidarScan scan, std::size_t lidar) {
   if (lidar >= T_imu_lidars_.size()) return;
+  if (lidar == 0 && !scan.empty()) scan_period_ = Nanoseconds(scan.span_ns());
   if (initializer_.done()) {
     // A scan that began before the initialisation ended has points the filter holds no state
     // for: dropped whichever way it arrived, so live and replay start from the same scan.
@@ -279,11 +280,13 @@ void LioPipeline::propagate_to(const MeasurementGroup& group, ImuPoseTrack& trac
   push_pose(ImuReading{prev_imu_.gyro_rad_s, prev_imu_.accel_m_s2});
 }
 
-void LioPipeline::visual_update(const MeasurementGroup& group, bool lio_matched,
+void LioPipeline::visual_update(const MeasurementGroup& group, MappedTime t_begin, bool lio_matched,
                                 FrameReport& report) {
   const std::vector<Eigen::Vector3d>& normals = lio_matched ? p2p_->matched_normals() : no_normals_;
+  const vio::RecentSweep::View sweep =
+      recent_sweep_.add(t_begin, group.t_update, scan_period_, world_points_, normals);
   report.vio =
-      vio_->process(group.image, belief_, world_points_, normals, *map_, options_.vio_debug);
+      vio_->process(group.image, belief_, *sweep.points, *sweep.normals, *map_, options_.vio_debug);
   if (!report.vio.ran) {
     ++images_rejected_;
     return;
@@ -380,6 +383,7 @@ void LioPipeline::process_group(const MeasurementGroup& group,
     report.raw_points = static_cast<int>(group.scan.size());
   }
 
+  const MappedTime t_begin = state_time_;  // the previous update's time
   auto t0 = std::chrono::steady_clock::now();
   propagate_to(group, track_);
   report.timings.propagate_ms = ms_since(t0);
@@ -494,7 +498,7 @@ void LioPipeline::process_group(const MeasurementGroup& group,
   colored_.clear();
   if (visual) {
     t0 = std::chrono::steady_clock::now();
-    visual_update(group, matched, report);
+    visual_update(group, t_begin, matched, report);
     report.timings.vio_ms = ms_since(t0);
     estimate_final();
   }

@@ -36,6 +36,7 @@
 #include "estimator/params.hpp"
 #include "estimator/sync/measurement_sync.hpp"
 #include "estimator/task_runner.hpp"
+#include "estimator/vio/recent_sweep.hpp"
 #include "estimator/vio/vio_processor.hpp"
 
 namespace livod::estimator {
@@ -209,7 +210,9 @@ class LioPipeline {
   // poses along the way (for undistortion).
   void propagate_to(const MeasurementGroup& group, ImuPoseTrack& track);
   // The visual update of an image group, after the LIO update and map insertion.
-  void visual_update(const MeasurementGroup& group, bool lio_matched, FrameReport& report);
+  // `t_begin`: the previous update time (the group holds the points measured since).
+  void visual_update(const MeasurementGroup& group, MappedTime t_begin, bool lio_matched,
+                     FrameReport& report);
   // Selects, undistorts (to t) and downsamples one LiDAR's points, appending them to
   // undistorted_ and point_lidar_.
   void prepare_points(const LidarScan& scan, std::size_t lidar, MappedTime t,
@@ -261,6 +264,8 @@ class LioPipeline {
   std::unique_ptr<vio::VioProcessor> vio_;
   std::vector<Eigen::Vector3d> scan_world_;  // the scan in the world after the LIO update
   std::vector<Eigen::Vector3d> no_normals_;
+  vio::RecentSweep recent_sweep_;  // what the visual update looks at: a whole sweep
+  Nanoseconds scan_period_{0};     // the span of the newest scan
   std::vector<std::uint32_t> colors_;
   std::vector<std::uint8_t> colored_;
   std::uint64_t images_unused_ = 0;
