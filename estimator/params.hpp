@@ -74,6 +74,11 @@ struct LioParams {
   // that covariance scaled down (VoxelMap's max_cov_points_size): more points per plane at the
   // memory of a frozen node.
   int max_cov_points = 50;
+  // A scan goes into the map only from a new viewpoint (map/insert_gate.hpp): once the IMU moved
+  // at least map_min_move_m or turned at least map_min_turn_deg since the last inserted scan.
+  // 0: every scan (FAST-LIVO2). One LiDAR only (its groups are whole scans).
+  double map_min_move_m = 0.0;
+  double map_min_turn_deg = 10.0;
   std::vector<int> layer_init_num = {5, 5, 5, 5, 5};  // points to fit a plane, per layer
   int plane_update_points = 5;    // new points that trigger a plane refit (hard-coded upstream)
   int point_filter_num = 1;       // keep one point in n (lio/point_filter.hpp)

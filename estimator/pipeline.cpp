@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/so3.hpp"
+#include "core/units.hpp"
 #include "estimator/imu/propagation.hpp"
 #include "estimator/lio/point_filter.hpp"
 
@@ -50,13 +51,22 @@ LioPipeline::LioPipeline(PipelineOptions options)
                        options_.params.vio.image_timeout_s, T_imu_lidars_.size(),
                        options_.lidar_wait_s}),
       map_(std::make_unique<VoxelMap>(options_.params.lio, options_.params.map)),
-      downsampler_(options_.params.lio.filter_size_surf) {
+      downsampler_(options_.params.lio.filter_size_surf),
+      map_gate_(options_.params.lio.map_min_move_m,
+                options_.params.lio.map_min_turn_deg * kDegToRad) {
   if (T_imu_lidars_.size() > kMaxLidars) {
     throw std::invalid_argument("LioPipeline: at most " + std::to_string(kMaxLidars) + " LiDARs");
   }
   if (T_imu_lidars_.size() > 1 && options_.camera && options_.params.vio.enabled) {
     throw std::invalid_argument(
         "LioPipeline: the visual update runs with one LiDAR only (several LiDARs: LIO)");
+  }
+  if (T_imu_lidars_.size() > 1 && options_.params.lio.map_min_move_m > 0.0) {
+    // The gate admits a sweep of one LiDAR's scan period; with several, a group holds parts of
+    // each one's scans, whose sweeps begin at different times.
+    throw std::invalid_argument(
+        "LioPipeline: lio.map_min_move_m (inserting scans from new viewpoints only) takes one "
+        "LiDAR");
   }
   if (options_.lidar_lio.size() > T_imu_lidars_.size()) {
     throw std::invalid_argument("LioPipeline: more per-LiDAR settings than LiDARs");
@@ -480,7 +490,9 @@ void LioPipeline::process_group(const MeasurementGroup& group,
       if (pose_in_map) world_points_[i].cov += J_rot * P_rot * J_rot.transpose() + P_pos;
     }
   });
-  if (builds_map_all_) {
+  if (!map_gate_.admit(t_begin, group.t_update, scan_period_, R, belief_.x.p_world_imu)) {
+    ++counters_.scans_not_mapped;  // the same view again (lio.map_min_move_m)
+  } else if (builds_map_all_) {
     map_->insert(world_points_, options_.runner);
   } else {
     // Only the points of the LiDARs that build the map (LidarLioParams::build_map).

@@ -32,6 +32,7 @@
 #include "estimator/lio/point_budget.hpp"
 #include "estimator/lio/point_to_plane.hpp"
 #include "estimator/lio/spatial_order.hpp"
+#include "estimator/map/insert_gate.hpp"
 #include "estimator/map/voxel_map.hpp"
 #include "estimator/params.hpp"
 #include "estimator/sync/measurement_sync.hpp"
@@ -144,6 +145,7 @@ struct PipelineCounters {
   std::uint64_t imu_queue_overflow = 0;
   std::uint64_t frames_without_update = 0;
   std::uint64_t degenerate_frames = 0;
+  std::uint64_t scans_not_mapped = 0;  // no new viewpoint (lio.map_min_move_m): not inserted
   std::uint64_t images_in = 0;
   // No camera configured, VIO disabled, before the IMU initialisation or the first scan's end.
   std::uint64_t images_unused = 0;
@@ -264,6 +266,7 @@ class LioPipeline {
   std::unique_ptr<vio::VioProcessor> vio_;
   std::vector<Eigen::Vector3d> scan_world_;  // the scan in the world after the LIO update
   std::vector<Eigen::Vector3d> no_normals_;
+  MapInsertGate map_gate_;         // which scans go into the map (lio.map_min_move_m)
   vio::RecentSweep recent_sweep_;  // what the visual update looks at: a whole sweep
   Nanoseconds scan_period_{0};     // the span of the newest scan
   std::vector<std::uint32_t> colors_;

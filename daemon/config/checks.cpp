@@ -405,11 +405,17 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
           first_camera = static_cast<int>(i);
         }
         break;
-      case SensorKind::lidar:
+      case SensorKind::lidar: {
         // Every enabled LiDAR feeds the estimator (docs/estimator.md "Several LiDARs"), up to
         // estimator::kMaxLidars, and LiDAR-inertial only: the visual update takes one LiDAR's scan.
         ++enabled_lidars;
         if (s.lio.build_map) ++lidars_building_map;
+        // "<this LiDAR> and <the first> are both enabled", for what takes one LiDAR.
+        const auto both_lidars = [&] {
+          return where + " and " +
+                 sensor_label(sites, config, static_cast<std::size_t>(first_lidar)) +
+                 " are both enabled";
+        };
         if (first_lidar < 0) {
           first_lidar = static_cast<int>(i);
         } else if (enabled_lidars > estimator::kMaxLidars) {
@@ -419,13 +425,21 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
                              std::to_string(estimator::kMaxLidars) + " LiDARs: disable one");
         } else if (visual_update) {
           problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
-                         where + " and " +
-                             sensor_label(sites, config, static_cast<std::size_t>(first_lidar)) +
-                             " are both enabled with a camera and estimator.vio.enabled: the " +
+                         both_lidars() + " with a camera and estimator.vio.enabled: the " +
                              "visual update runs with one LiDAR only (disable one LiDAR, or set " +
                              "estimator.vio.enabled: false to fuse both LiDAR-inertially)");
         }
+        if (static_cast<int>(i) != first_lidar &&
+            config.estimator_given.contains("lio.map_min_move_m") &&
+            config.estimator.lio.map_min_move_m > 0.0) {
+          // The gate admits one LiDAR's sweeps; with several, a group holds parts of each one's.
+          problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
+                         both_lidars() + " with estimator.lio.map_min_move_m set: inserting " +
+                             "scans from new viewpoints only works with one LiDAR (remove " +
+                             "map_min_move_m, or disable one LiDAR)");
+        }
         break;
+      }
       case SensorKind::imu:
         if (sites[i].name_ok && config.body_sensor_index >= 0 &&
             static_cast<std::size_t>(config.body_sensor_index) != i) {

@@ -161,6 +161,11 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
                            ? "set in the configuration"
                            : name + " has no model facts: FAST-LIVO2's (map points carry the "
                                     "pose uncertainty)"});
+    choices.push_back({"lio.map_min_move_m", number(lio.map_min_move_m),
+                       given.contains("lio.map_min_move_m")
+                           ? "set in the configuration"
+                           : name + " has no model facts: every scan goes into the map "
+                                    "(FAST-LIVO2)"});
     return choices;
   }
   // Undistortion and downsampling cost per raw point: keep one point in n (alike in every ring,
@@ -195,6 +200,18 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
                       : name + (facts->spinning ? " has " + rings : " scans a dense rosette") +
                             ": map points carry their sensor noise only (the pose term tilts "
                             "long drives)");
+  // Few rings see a street's ground in single rings at fixed ranges: inserted scan after scan from
+  // one place, the sensor's systematic range errors become planes that move with it, and once it
+  // drives off, the map holds it back (the VLP-16 street: lost at 100 m -> 47 mm).
+  const bool few_rings = spinning_with_fewer_rings(facts, kViewpointGatedRings);
+  const std::string gated = name + "'s " + rings + ": a scan goes into the map only after the " +
+                            "sensor moved " + number(kViewpointMoveM) +
+                            " m or turned lio.map_min_turn_deg (standing still, the same view " +
+                            "bends the map)";
+  const std::string every = name + (facts->spinning ? " has " + rings : " scans a dense rosette") +
+                            ": every scan goes into the map (FAST-LIVO2)";
+  choose("lio.map_min_move_m", lio.map_min_move_m, few_rings ? kViewpointMoveM : 0.0,
+         few_rings ? gated : every);
   return choices;
 }
 
@@ -232,6 +249,21 @@ void apply_estimator_defaults(LivodConfig& config) {
     fill("point_filter_num", s.lio.point_filter_num, own.lio.point_filter_num);
   }
   match_sparse_beside_dense(config);
+  // The viewpoint gate takes whole scans of one LiDAR (estimator/map/insert_gate.hpp); with
+  // several, every group goes into the map. A file that sets it with several LiDARs is rejected
+  // (checks.cpp).
+  const auto lidars = std::count_if(config.sensors.begin(), config.sensors.end(),
+                                    [](const SensorConfig& s) { return enabled_lidar(s); });
+  if (lidars > 1 && !config.estimator_given.contains("lio.map_min_move_m") &&
+      config.estimator.lio.map_min_move_m > 0.0) {
+    config.estimator.lio.map_min_move_m = 0.0;
+    for (EstimatorChoice& c : config.estimator_choices) {
+      if (c.key != "lio.map_min_move_m") continue;
+      c.value = number(0.0);
+      c.reason = std::to_string(lidars) +
+                 " LiDARs: every scan goes into the map (the viewpoint gate takes one LiDAR)";
+    }
+  }
 }
 
 }  // namespace livod::daemon

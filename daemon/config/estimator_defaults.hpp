@@ -78,9 +78,20 @@ inline constexpr int kDefaultPlanePoints = 500;
 // (lio.map_pose_covariance): measured, docs/estimator.md "Long drives".
 inline constexpr int kDenseRings = 64;
 
-// A spinning LiDAR with fewer than kDenseRings rings (false without facts: nothing is known).
+// Spinning LiDARs with fewer rings than this insert a scan into the map only from a new viewpoint
+// (lio.map_min_move_m = kViewpointMoveM; estimator/map/insert_gate.hpp): the VLP-16 on the
+// realistic street lost track without it (docs/estimator.md "Map insertion from new viewpoints").
+inline constexpr int kViewpointGatedRings = 32;
+inline constexpr double kViewpointMoveM = 0.5;
+
+// A spinning LiDAR with fewer than `rings` rings (false without facts: nothing is known).
+inline bool spinning_with_fewer_rings(const std::optional<LidarModelFacts>& facts, int rings) {
+  return facts && facts->spinning && facts->beams > 0 && facts->beams < rings;
+}
+
+// A spinning LiDAR with fewer than kDenseRings rings.
 inline bool sparse_spinning(const std::optional<LidarModelFacts>& facts) {
-  return facts && facts->spinning && facts->beams > 0 && facts->beams < kDenseRings;
+  return spinning_with_fewer_rings(facts, kDenseRings);
 }
 
 }  // namespace livod::daemon

@@ -47,6 +47,8 @@ void read_lio(MapReader& m, estimator::LioParams& lio, std::set<std::string>& gi
   note(m.read("range_limit_m", lio.range_limit_m, closed(0.0, 10000.0)), "range_limit_m");
   note(m.read("dept_err_at_limit", lio.dept_err_at_limit, closed(0.0, 1.0)), "dept_err_at_limit");
   m.read("min_eigen_value", lio.min_eigen_value, left_open(0.0, 1.0));
+  note(m.read("map_min_move_m", lio.map_min_move_m, closed(0.0, 100.0)), "map_min_move_m");
+  note(m.read("map_min_turn_deg", lio.map_min_turn_deg, left_open(0.0, 180.0)), "map_min_turn_deg");
   m.read("sigma_num", lio.sigma_num, left_open(0.0, 10.0));
   m.read("voxel_size", lio.voxel_size, closed(0.05, 10.0));
   m.read("max_layer", lio.max_layer, 0, 4);

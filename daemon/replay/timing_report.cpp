@@ -94,9 +94,11 @@ std::string format_timing_text(const ReplaySummary& s) {
   out += fmt::format("livod replay of {}\n", s.config_file);
   out += fmt::format(
       "frames: {} poses; scans in {}, before IMU init {}, out of order {}, queue overflow {}; "
-      "frames without update {}; degenerate frames {}\n",
+      "frames without update {}; degenerate frames {}; scans not put into the map (no new "
+      "viewpoint, lio.map_min_move_m) {}\n",
       s.frames, s.counters.scans_in, s.counters.scans_before_init, s.counters.scans_out_of_order,
-      s.counters.scans_queue_overflow, s.counters.frames_without_update, s.degenerate_frames);
+      s.counters.scans_queue_overflow, s.counters.frames_without_update, s.degenerate_frames,
+      s.counters.scans_not_mapped);
   out += fmt::format("imu: samples in {}, out of order {}, queue overflow {}; init: {}\n",
                      s.counters.imu_in, s.counters.imu_out_of_order, s.counters.imu_queue_overflow,
                      s.init_status);
@@ -178,9 +180,9 @@ std::string format_timing_json(const ReplaySummary& s) {
   out += fmt::format("  \"config\": {},\n", json_string(s.config_file));
   out += fmt::format(
       "  \"frames\": {}, \"scans_in\": {}, \"scans_before_init\": {}, \"scans_out_of_order\": {}, "
-      "\"frames_without_update\": {}, \"degenerate_frames\": {},\n",
+      "\"frames_without_update\": {}, \"degenerate_frames\": {}, \"scans_not_mapped\": {},\n",
       s.frames, s.counters.scans_in, s.counters.scans_before_init, s.counters.scans_out_of_order,
-      s.counters.frames_without_update, s.degenerate_frames);
+      s.counters.frames_without_update, s.degenerate_frames, s.counters.scans_not_mapped);
   out += fmt::format("  \"imu_in\": {}, \"imu_out_of_order\": {}, \"init_status\": {},\n",
                      s.counters.imu_in, s.counters.imu_out_of_order, json_string(s.init_status));
   out += fmt::format("  \"frame_ms\": {},\n  \"frame_cpu_ms\": {},\n",

@@ -103,7 +103,8 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   const auto r = load(ouster_config(
       "OS1-128",
       "{lio: {point_filter_num: 1, point_budget: 0, dept_err: 0.03, beam_err_deg: 0.2, "
-      "filter_size_surf: 0.3, map_pose_covariance: true, max_points_num: 50}}"));
+      "filter_size_surf: 0.3, map_pose_covariance: true, max_points_num: 50, map_min_move_m: "
+      "0.25}}"));
   ASSERT_TRUE(r.ok()) << dump(r);
   const auto& lio = r.config.estimator.lio;
   EXPECT_EQ(lio.point_filter_num, 1);
@@ -113,6 +114,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   EXPECT_DOUBLE_EQ(lio.filter_size_surf, 0.3);
   EXPECT_TRUE(lio.map_pose_covariance);
   EXPECT_EQ(lio.max_points_num, 50);
+  EXPECT_DOUBLE_EQ(lio.map_min_move_m, 0.25);
   for (const auto& c : r.config.estimator_choices) {
     EXPECT_EQ(c.reason, "set in the configuration") << c.key;
   }
@@ -153,6 +155,56 @@ TEST(EstimatorDefaults, MapPoseCovarianceFollowsTheRings) {
   const auto set = load(ouster_config("OS1-64", "{lio: {map_pose_covariance: true}}"));
   ASSERT_TRUE(set.ok()) << dump(set);
   EXPECT_TRUE(set.config.estimator.lio.map_pose_covariance);
+}
+
+// Inserting scans from new viewpoints only: the spinning LiDARs with fewer than 32 rings (the
+// VLP-16 lost track on the realistic street without it); every scan for the rest and for a model
+// without facts (FAST-LIVO2).
+TEST(EstimatorDefaults, ViewpointGateFollowsTheRings) {
+  const auto min_move = [](const char* model) {
+    estimator::EstimatorParams params;
+    params.lio.map_min_move_m = 7.0;  // must be overwritten
+    const auto facts = lidar_model_facts(model);
+    const auto choices = estimator_settings_for(facts, model, {}, params);
+    const auto c = std::find_if(choices.begin(), choices.end(),
+                                [](const auto& e) { return e.key == "lio.map_min_move_m"; });
+    EXPECT_NE(c, choices.end()) << model;
+    if (c != choices.end()) {
+      EXPECT_EQ(c->value, params.lio.map_min_move_m > 0.0 ? "0.5" : "0") << model;
+    }
+    return params.lio.map_min_move_m;
+  };
+  EXPECT_DOUBLE_EQ(min_move("VLP-16"), kViewpointMoveM);
+  for (const char* model :
+       {"HDL-32E", "PANDARXT32", "OS0-32", "OS1-64", "OS1-128", "AVIA", "MID-360"}) {
+    EXPECT_DOUBLE_EQ(min_move(model), 0.0) << model;
+  }
+  // No facts: the estimator's own (FAST-LIVO2's), explained.
+  estimator::EstimatorParams unknown;
+  const auto choices = estimator_settings_for(std::nullopt, "XYZ-99", {}, unknown);
+  EXPECT_DOUBLE_EQ(unknown.lio.map_min_move_m, 0.0);
+  EXPECT_TRUE(std::any_of(choices.begin(), choices.end(),
+                          [](const auto& e) { return e.key == "lio.map_min_move_m"; }));
+  // Through the configuration: the VLP-16 alone gets it, the file's value wins.
+  const std::string alone = R"(body_frame: imu
+sensors:
+  - name: vlp16
+    driver: velodyne
+    model: VLP-16
+    source: {udp: {}}
+    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
+  - name: imu
+    driver: serial_imu
+    source: {device: {path: /dev/ttyUSB0}}
+    serial: {protocol: xsens_mtdata2}
+)";
+  const auto gated = load(alone);
+  ASSERT_TRUE(gated.problems.empty()) << dump(gated);
+  EXPECT_DOUBLE_EQ(gated.config.estimator.lio.map_min_move_m, kViewpointMoveM);
+  const auto set = load(alone + "estimator: {lio: {map_min_move_m: 0}}\n");
+  ASSERT_TRUE(set.problems.empty()) << dump(set);
+  EXPECT_DOUBLE_EQ(set.config.estimator.lio.map_min_move_m, 0.0);
+  EXPECT_EQ(choice(set.config, "lio.map_min_move_m")->reason, "set in the configuration");
 }
 
 TEST(EstimatorDefaults, UnknownModelGetsTheBudgetAndSaysWhy) {

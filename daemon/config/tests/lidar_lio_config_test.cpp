@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 
 #include "daemon/config/estimator_defaults.hpp"
@@ -173,6 +174,38 @@ TEST(LidarLioConfig, SparseLidarBesideADenserOneIsMatchedOnlyByDefault) {
     EXPECT_TRUE(alone.config.sensors.at(0).lio.build_map) << avia;
     EXPECT_FALSE(alone.config.sensors.at(0).lio_from_model.contains("build_map")) << avia;
   }
+}
+
+// Inserting scans from new viewpoints only (lio.map_min_move_m) skips whole groups, and with
+// several LiDARs a group holds parts of each one's scans: the VLP-16's default is dropped beside
+// another LiDAR (said so), and a file that sets it with two LiDARs is refused.
+TEST(LidarLioConfig, ViewpointGateTakesOneLidar) {
+  const auto pair = load(two_lidars(""));
+  ASSERT_TRUE(pair.problems.empty()) << dump(pair);
+  EXPECT_DOUBLE_EQ(pair.config.estimator.lio.map_min_move_m, 0.0);
+  const auto c =
+      std::find_if(pair.config.estimator_choices.begin(), pair.config.estimator_choices.end(),
+                   [](const auto& e) { return e.key == "lio.map_min_move_m"; });
+  ASSERT_NE(c, pair.config.estimator_choices.end());
+  EXPECT_EQ(c->value, "0");
+  EXPECT_NE(c->reason.find("2 LiDARs"), std::string::npos) << c->reason;
+  // The Avia disabled: the VLP-16 alone keeps its gate.
+  const auto alone = load(two_lidars("", "    enabled: false\n"));
+  ASSERT_TRUE(alone.problems.empty()) << dump(alone);
+  EXPECT_GT(alone.config.estimator.lio.map_min_move_m, 0.0);
+
+  const std::string set = two_lidars("", "", "", "estimator: {lio: {map_min_move_m: 0.5}}\n");
+  const auto refused = load_config_from_string(set, "test.yaml");
+  const ConfigProblem* p =
+      test::find_problem(refused, ProblemKind::not_implemented, "sensors[1].enabled");
+  ASSERT_NE(p, nullptr) << dump(refused);
+  EXPECT_NE(p->message.find("map_min_move_m"), std::string::npos) << p->message;
+  // One LiDAR: accepted.
+  const auto one = load_config_from_string(
+      two_lidars("", "    enabled: false\n", "", "estimator: {lio: {map_min_move_m: 0.5}}\n"),
+      "test.yaml");
+  EXPECT_EQ(test::find_problem(one, ProblemKind::not_implemented, "sensors[1].enabled"), nullptr)
+      << dump(one);
 }
 
 }  // namespace
