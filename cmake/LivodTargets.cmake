@@ -71,15 +71,17 @@ function(livod_add_library name)
   target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LIBS} PRIVATE livod_warnings ${ARG_PRIVATE_LIBS})
 endfunction()
 
-# livod_add_test(NAME SOURCES ... LIBS ... [LABELS ...] [RUN_SERIAL] [COST seconds])
+# livod_add_test(NAME SOURCES ... LIBS ... [LABELS ...] [RUN_SERIAL] [COST seconds] [TIMEOUT seconds])
 # Tests find the real captures through LIVOD_DATA_DIR (environment overrides the build default).
 # RUN_SERIAL: ctest runs nothing else meanwhile (real-time tests that expect zero packet loss).
 # COST: the expected run time of each of its tests, for ctest -j's order (costliest first).
+# TIMEOUT: each of its tests' own limit, above the test preset's default (ctest's --timeout applies
+# only to tests without one); 0 or absent: the default.
 function(livod_add_test name)
   if(NOT LIVOD_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "RUN_SERIAL" "COST" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "RUN_SERIAL" "COST;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   set(serial FALSE)
   if(ARG_RUN_SERIAL)
     set(serial TRUE)
@@ -87,6 +89,10 @@ function(livod_add_test name)
   set(cost 0)
   if(ARG_COST)
     set(cost ${ARG_COST})
+  endif()
+  set(timeout "")
+  if(ARG_TIMEOUT)
+    set(timeout TIMEOUT ${ARG_TIMEOUT})
   endif()
   add_executable(${name} ${ARG_SOURCES})
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
@@ -96,7 +102,7 @@ function(livod_add_test name)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 120
     PROPERTIES LABELS "${ARG_LABELS}" ENVIRONMENT "LIVOD_DATA_DIR=${LIVOD_DATA_DIR}"
                ENVIRONMENT_MODIFICATION "LIVOD_SOURCE_DIR=set:${PROJECT_SOURCE_DIR}"
-               RUN_SERIAL ${serial} COST ${cost})
+               RUN_SERIAL ${serial} COST ${cost} ${timeout})
 endfunction()
 
 # livod_glob_library(NAME DIR [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])

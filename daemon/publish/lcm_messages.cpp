@@ -172,6 +172,7 @@ std::int8_t thread_state_code(ThreadState state) {
   me.imu_out_of_order = saturated(e.imu_out_of_order);
   me.frames_without_update = saturated(e.frames_without_update);
   me.degenerate_frames = saturated(e.degenerate_frames);
+  me.scans_not_mapped = saturated(e.scans_not_mapped);
   me.translation_ratio = e.translation_ratio;
   me.map_voxels = saturated(e.map_voxels);
   me.map_planes = saturated(e.map_planes);

@@ -140,6 +140,7 @@ struct EstimatorHealthRecord {
   std::uint64_t imu_out_of_order = 0;
   std::uint64_t frames_without_update = 0;
   std::uint64_t degenerate_frames = 0;
+  std::uint64_t scans_not_mapped = 0;  // matched but not inserted: no new viewpoint
   double translation_ratio = 0.0;  // of the latest frame
   std::uint64_t map_voxels = 0;
   std::uint64_t map_planes = 0;

@@ -205,6 +205,7 @@ void LiveOutputs::publish_health(Scheduler& scheduler, HostTime now) {
   e.imu_out_of_order = c.imu_out_of_order;
   e.frames_without_update = c.frames_without_update;
   e.degenerate_frames = c.degenerate_frames;
+  e.scans_not_mapped = c.scans_not_mapped;
   e.translation_ratio = last_degeneracy_ratio_;
   // The map's statistics as of the frames' last refresh (a full traversal is too costly here).
   e.map_voxels = last_map_.root_voxels;

@@ -346,6 +346,7 @@ HealthRecord sample_health() {
   e.imu_out_of_order = 7;
   e.frames_without_update = 8;
   e.degenerate_frames = 9;
+  e.scans_not_mapped = 11;
   e.translation_ratio = 0.125;
   e.map_voxels = 1000;
   e.map_planes = 800;
@@ -435,6 +436,7 @@ TEST(LcmMessages, HealthCarriesEveryField) {
   EXPECT_EQ(e.imu_out_of_order, 7);
   EXPECT_EQ(e.frames_without_update, 8);
   EXPECT_EQ(e.degenerate_frames, 9);
+  EXPECT_EQ(e.scans_not_mapped, 11);
   EXPECT_EQ(e.translation_ratio, 0.125);
   EXPECT_EQ(e.map_voxels, 1000);
   EXPECT_EQ(e.map_planes, 800);
