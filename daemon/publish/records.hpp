@@ -141,7 +141,7 @@ struct EstimatorHealthRecord {
   std::uint64_t frames_without_update = 0;
   std::uint64_t degenerate_frames = 0;
   std::uint64_t scans_not_mapped = 0;  // matched but not inserted: no new viewpoint
-  double translation_ratio = 0.0;  // of the latest frame
+  double translation_ratio = 0.0;      // of the latest frame
   std::uint64_t map_voxels = 0;
   std::uint64_t map_planes = 0;
   std::uint64_t map_points = 0;
