@@ -179,29 +179,20 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
              << std::lround(facts->points_per_scan / stride);
   choose("lio.point_filter_num", lio.point_filter_num, stride, why_stride.str());
   // The noise model of the points: the datasheet's range noise, and a bearing noise of half the
-  // beam divergence (the footprint's half width: where in it the echo comes from is unknown), but
-  // for a dense spinning LiDAR, whose planes many rings fit (kDenseBeamErrDeg).
+  // beam divergence (the footprint's half width: where in it the echo comes from is unknown).
   choose("lio.dept_err", lio.dept_err, std::max(0.01, facts->range_sigma_m),
          name + " range noise " + number(facts->range_sigma_m) + " m (" +
              std::string(facts->source) + ")");
-  const bool sparse_rings = sparse_spinning(facts);
-  const bool dense_rings = facts->spinning && !sparse_rings && facts->beams > 0;
-  const std::string rings = std::to_string(facts->beams) + " rings";
-  if (dense_rings) {
-    choose("lio.beam_err_deg", lio.beam_err_deg, kDenseBeamErrDeg,
-           name + "'s " + rings + " fit each plane: FAST-LIVO2's " + number(kDenseBeamErrDeg) +
-               " deg, not half its beam divergence of " + number(facts->divergence_deg) +
-               " deg (that made its far planes too weak)");
-  } else {
-    choose("lio.beam_err_deg", lio.beam_err_deg, std::max(0.05, 0.5 * facts->divergence_deg),
-           "half the beam divergence of " + number(facts->divergence_deg) + " deg" +
-               (facts->divergence_assumed ? " (not in livod's sources for " + name +
-                                                ": a spinning LiDAR's 3 mrad assumed)"
-                                          : std::string()));
-  }
+  choose("lio.beam_err_deg", lio.beam_err_deg, std::max(0.05, 0.5 * facts->divergence_deg),
+         "half the beam divergence of " + number(facts->divergence_deg) + " deg" +
+             (facts->divergence_assumed
+                  ? " (not in livod's sources for " + name + ": a spinning LiDAR's 3 mrad assumed)"
+                  : std::string()));
   // The pose uncertainty at insertion is common to a scan; added to each map point it weights
   // far planes less, which tilts a long drive (docs/estimator.md "Long drives") but is what keeps
   // a sparse spinning LiDAR's street on track (its rings cut voxels in single-ring lines).
+  const bool sparse_rings = sparse_spinning(facts);
+  const std::string rings = std::to_string(facts->beams) + " rings";
   choose("lio.map_pose_covariance", lio.map_pose_covariance, sparse_rings,
          sparse_rings ? name + "'s " + rings +
                             ": map points carry the pose uncertainty (a street drive without it "

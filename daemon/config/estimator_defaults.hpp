@@ -77,13 +77,6 @@ inline constexpr int kDefaultPlanePoints = 500;
 // Spinning LiDARs with fewer rings than this insert their map points with the pose uncertainty
 // (lio.map_pose_covariance): measured, docs/estimator.md "Long drives".
 inline constexpr int kDenseRings = 64;
-// The bearing noise (lio.beam_err_deg) of a spinning LiDAR with kDenseRings rings or more:
-// FAST-LIVO2's 0.05 deg instead of half the beam divergence, which made the far planes of a
-// LiDAR whose planes many rings fit too weak. Measured over 3 seeds (docs/estimator.md "Defaults
-// against tuned settings"): OS1-128 street 20.7 -> 12.2 mm, OS1-64 drone street 4.9 -> 4.4 mm,
-// the 15-minute OS1-64 drive's end +14 -> +13.4 m. Not lower: 0.03 lost that drive in its first
-// minute (0.04 kept it: the margin was preferred to the last millimetres).
-inline constexpr double kDenseBeamErrDeg = 0.05;
 
 // Spinning LiDARs with fewer rings than this insert a scan into the map only from a new viewpoint
 // (lio.map_min_move_m = kViewpointMoveM; estimator/map/insert_gate.hpp): the VLP-16 on the
