@@ -128,6 +128,11 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
     field = value;
     choices.push_back({key, text(field), reason});
   };
+  // A value left as the file or the estimator has it, explained.
+  const auto keep = [&](const char* key, auto field, const std::string& reason) {
+    choices.push_back(
+        {key, text(field), given.contains(key) ? std::string("set in the configuration") : reason});
+  };
   const std::string name = model.empty() ? std::string("unknown model") : std::string(model);
 
   // The update's cost per frame follows the points it works on: a fixed budget per scan, whatever
@@ -148,24 +153,13 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
   if (!facts) {
     choose("lio.point_filter_num", lio.point_filter_num, 1,
            name + " has no model facts: every point, the point budget bounds the cost");
-    choices.push_back({"lio.dept_err", number(lio.dept_err),
-                       given.contains("lio.dept_err")
-                           ? "set in the configuration"
-                           : name + " has no model facts: FAST-LIVO2's range noise"});
-    choices.push_back({"lio.beam_err_deg", number(lio.beam_err_deg),
-                       given.contains("lio.beam_err_deg")
-                           ? "set in the configuration"
-                           : name + " has no model facts: FAST-LIVO2's bearing noise"});
-    choices.push_back({"lio.map_pose_covariance", lio.map_pose_covariance ? "true" : "false",
-                       given.contains("lio.map_pose_covariance")
-                           ? "set in the configuration"
-                           : name + " has no model facts: FAST-LIVO2's (map points carry the "
-                                    "pose uncertainty)"});
-    choices.push_back({"lio.map_min_move_m", number(lio.map_min_move_m),
-                       given.contains("lio.map_min_move_m")
-                           ? "set in the configuration"
-                           : name + " has no model facts: every scan goes into the map "
-                                    "(FAST-LIVO2)"});
+    const std::string no_facts = name + " has no model facts: ";
+    keep("lio.dept_err", lio.dept_err, no_facts + "FAST-LIVO2's range noise");
+    keep("lio.beam_err_deg", lio.beam_err_deg, no_facts + "FAST-LIVO2's bearing noise");
+    keep("lio.map_pose_covariance", lio.map_pose_covariance,
+         no_facts + "FAST-LIVO2's (map points carry the pose uncertainty)");
+    keep("lio.map_min_move_m", lio.map_min_move_m,
+         no_facts + "every scan goes into the map (FAST-LIVO2)");
     return choices;
   }
   // Undistortion and downsampling cost per raw point: keep one point in n (alike in every ring,
@@ -193,11 +187,13 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
   // a sparse spinning LiDAR's street on track (its rings cut voxels in single-ring lines).
   const bool sparse_rings = sparse_spinning(facts);
   const std::string rings = std::to_string(facts->beams) + " rings";
+  // "OS1-128 has 128 rings" / "AVIA scans a dense rosette"
+  const std::string scans = name + (facts->spinning ? " has " + rings : " scans a dense rosette");
   choose("lio.map_pose_covariance", lio.map_pose_covariance, sparse_rings,
          sparse_rings ? name + "'s " + rings +
                             ": map points carry the pose uncertainty (a street drive without it "
                             "loses track)"
-                      : name + (facts->spinning ? " has " + rings : " scans a dense rosette") +
+                      : scans +
                             ": map points carry their sensor noise only (the pose term tilts "
                             "long drives)");
   // Few rings see a street's ground in single rings at fixed ranges: inserted scan after scan from
@@ -208,8 +204,7 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
                             "sensor moved " + number(kViewpointMoveM) +
                             " m or turned lio.map_min_turn_deg (standing still, the same view " +
                             "bends the map)";
-  const std::string every = name + (facts->spinning ? " has " + rings : " scans a dense rosette") +
-                            ": every scan goes into the map (FAST-LIVO2)";
+  const std::string every = scans + ": every scan goes into the map (FAST-LIVO2)";
   choose("lio.map_min_move_m", lio.map_min_move_m, few_rings ? kViewpointMoveM : 0.0,
          few_rings ? gated : every);
   return choices;

@@ -186,18 +186,7 @@ TEST(EstimatorDefaults, ViewpointGateFollowsTheRings) {
   EXPECT_TRUE(std::any_of(choices.begin(), choices.end(),
                           [](const auto& e) { return e.key == "lio.map_min_move_m"; }));
   // Through the configuration: the VLP-16 alone gets it, the file's value wins.
-  const std::string alone = R"(body_frame: imu
-sensors:
-  - name: vlp16
-    driver: velodyne
-    model: VLP-16
-    source: {udp: {}}
-    extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}
-  - name: imu
-    driver: serial_imu
-    source: {device: {path: /dev/ttyUSB0}}
-    serial: {protocol: xsens_mtdata2}
-)";
+  const std::string alone = test::minimal_config();  // a VLP-16 and a serial IMU
   const auto gated = load(alone);
   ASSERT_TRUE(gated.problems.empty()) << dump(gated);
   EXPECT_DOUBLE_EQ(gated.config.estimator.lio.map_min_move_m, kViewpointMoveM);
