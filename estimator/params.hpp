@@ -65,10 +65,17 @@ struct LioParams {
   double range_limit_m = 0.0;
   double dept_err_at_limit = 0.0;
   double min_eigen_value = 0.0025;  // planarity: smallest eigenvalue (m^2) below this
-  double sigma_num = 3.0;           // association gate, in sigmas
-  double voxel_size = 0.5;          // root voxel edge (m)
-  int max_layer = 2;                // octree depth below the root voxel
-  int max_points_num = 50;          // a plane freezes after this many points
+  // A plane must also span two directions: its points' spread along the narrower one (the middle
+  // eigenvalue) at least this many times their noise variance along it, or they are a line, such
+  // as one ring's hits, that the noise along the rays makes look flat (map/plane.hpp). A line is
+  // not matched and not split; it becomes a plane when more points span it. 0: off (FAST-LIVO2).
+  // Compared with the map points' covariances: meant for lio.map_pose_covariance off, as the pose
+  // term does not spread the points.
+  double min_plane_spread_ratio = 0.0;
+  double sigma_num = 3.0;   // association gate, in sigmas
+  double voxel_size = 0.5;  // root voxel edge (m)
+  int max_layer = 2;        // octree depth below the root voxel
+  int max_points_num = 50;  // a plane freezes after this many points
   // A plane node stores at most this many points (their covariances give the plane's). Past them,
   // while max_points_num is larger, the plane is refitted from the moments of all its points with
   // that covariance scaled down (VoxelMap's max_cov_points_size): more points per plane at the

@@ -134,6 +134,13 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
         {key, text(field), given.contains(key) ? std::string("set in the configuration") : reason});
   };
   const std::string name = model.empty() ? std::string("unknown model") : std::string(model);
+  // The plane spread test compares a plane's spread with its points' covariances, which must then
+  // be their sensor noise: the pose term is common to a scan and spreads nothing.
+  const bool spread_given =
+      given.contains("lio.min_plane_spread_ratio") && lio.min_plane_spread_ratio > 0.0;
+  const std::string spread_needs =
+      "lio.min_plane_spread_ratio is set: map points carry their sensor noise only (the spread "
+      "test compares with it)";
 
   // The update's cost per frame follows the points it works on: a fixed budget per scan, whatever
   // the sensor and the place, is what keeps every model real-time (lio/point_budget.hpp).
@@ -156,8 +163,14 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
     const std::string no_facts = name + " has no model facts: ";
     keep("lio.dept_err", lio.dept_err, no_facts + "FAST-LIVO2's range noise");
     keep("lio.beam_err_deg", lio.beam_err_deg, no_facts + "FAST-LIVO2's bearing noise");
-    keep("lio.map_pose_covariance", lio.map_pose_covariance,
-         no_facts + "FAST-LIVO2's (map points carry the pose uncertainty)");
+    if (spread_given) {
+      choose("lio.map_pose_covariance", lio.map_pose_covariance, false, spread_needs);
+    } else {
+      keep("lio.map_pose_covariance", lio.map_pose_covariance,
+           no_facts + "FAST-LIVO2's (map points carry the pose uncertainty)");
+    }
+    keep("lio.min_plane_spread_ratio", lio.min_plane_spread_ratio,
+         no_facts + "FAST-LIVO2's planarity test alone");
     keep("lio.map_min_move_m", lio.map_min_move_m,
          no_facts + "every scan goes into the map (FAST-LIVO2)");
     return choices;
@@ -182,24 +195,50 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
              (facts->divergence_assumed
                   ? " (not in livod's sources for " + name + ": a spinning LiDAR's 3 mrad assumed)"
                   : std::string()));
-  // The pose uncertainty at insertion is common to a scan; added to each map point it weights
-  // far planes less, which tilts a long drive (docs/estimator.md "Long drives") but is what keeps
-  // a sparse spinning LiDAR's street on track (its rings cut voxels in single-ring lines).
-  const bool sparse_rings = sparse_spinning(facts);
+  // Few rings (kFewRings) see most voxels in single rings. The pose uncertainty at insertion,
+  // common to a scan, added to each map point weights far planes less: that tilts a long drive
+  // (docs/estimator.md "Long drives") but keeps such a LiDAR's single-ring lines weak and its
+  // street on track. Denser rings span their voxels: their lines are kept out of the planes by
+  // the spread test instead, which needs points with their sensor noise only.
+  const bool few_rings = spinning_with_fewer_rings(facts, kFewRings);
   const std::string rings = std::to_string(facts->beams) + " rings";
   // "OS1-128 has 128 rings" / "AVIA scans a dense rosette"
   const std::string scans = name + (facts->spinning ? " has " + rings : " scans a dense rosette");
-  choose("lio.map_pose_covariance", lio.map_pose_covariance, sparse_rings,
-         sparse_rings ? name + "'s " + rings +
-                            ": map points carry the pose uncertainty (a street drive without it "
-                            "loses track)"
-                      : scans +
-                            ": map points carry their sensor noise only (the pose term tilts "
-                            "long drives)");
+  if (spread_given) {
+    choose("lio.map_pose_covariance", lio.map_pose_covariance, false, spread_needs);
+  } else {
+    choose("lio.map_pose_covariance", lio.map_pose_covariance, few_rings,
+           few_rings ? name + "'s " + rings +
+                           ": map points carry the pose uncertainty (its single-ring lines stay "
+                           "weak; a street drive without it loses track)"
+                     : scans +
+                           ": map points carry their sensor noise only (the pose term tilts "
+                           "long drives)");
+  }
+  // One ring's hits across a voxel look flat under range noise (a plane through the sensor):
+  // not planes (estimator/map/plane.hpp; the OS1-128 street 19.5 -> 11.6 mm, the HDL-32E's
+  // 21.4 -> 9.9 mm). Livox's rosette draws no rings: measured no better (the Avia room 13.8 ->
+  // 15.5 mm over 6 seeds), so off.
+  const bool spanning = facts->spinning && !few_rings && !lio.map_pose_covariance;
+  std::string spread_reason;
+  if (spanning) {
+    spread_reason = scans + ": a plane's points must spread at least twice their noise sigma " +
+                    "along its narrower direction (one ring's hits are a line, not a plane)";
+  } else if (few_rings) {
+    spread_reason = name + "'s " + rings + ": off (most voxels hold one ring: without them too " +
+                    "few planes are left, and the realistic VLP-16 street loses track)";
+  } else if (lio.map_pose_covariance) {
+    spread_reason =
+        "lio.map_pose_covariance is set: off (the test compares a plane's spread with "
+        "its points' noise, and the pose term is not noise)";
+  } else {
+    spread_reason = scans + ": off (FAST-LIVO2's planarity test alone; no gain measured)";
+  }
+  choose("lio.min_plane_spread_ratio", lio.min_plane_spread_ratio,
+         spanning ? kPlaneSpreadRatio : 0.0, spread_reason);
   // Few rings see a street's ground in single rings at fixed ranges: inserted scan after scan from
   // one place, the sensor's systematic range errors become planes that move with it, and once it
   // drives off, the map holds it back (the VLP-16 street: lost at 100 m -> 47 mm).
-  const bool few_rings = spinning_with_fewer_rings(facts, kViewpointGatedRings);
   const std::string gated = name + "'s " + rings + ": a scan goes into the map only after the " +
                             "sensor moved " + number(kViewpointMoveM) +
                             " m or turned lio.map_min_turn_deg (standing still, the same view " +

@@ -74,15 +74,22 @@ inline constexpr double kRawPointsPerScan = 35000.0;
 // 0.9 mm of plane offset noise instead of 2.8 mm under 2 cm of range noise (docs/estimator.md
 // "Map").
 inline constexpr int kDefaultPlanePoints = 500;
-// Spinning LiDARs with fewer rings than this insert their map points with the pose uncertainty
-// (lio.map_pose_covariance): measured, docs/estimator.md "Long drives".
+// A spinning LiDAR with fewer rings than this, beside a denser LiDAR that builds the map, is
+// matched only (apply_estimator_defaults; docs/estimator.md "Several LiDARs").
 inline constexpr int kDenseRings = 64;
 
-// Spinning LiDARs with fewer rings than this insert a scan into the map only from a new viewpoint
-// (lio.map_min_move_m = kViewpointMoveM; estimator/map/insert_gate.hpp): the VLP-16 on the
-// realistic street lost track without it (docs/estimator.md "Map insertion from new viewpoints").
-inline constexpr int kViewpointGatedRings = 32;
+// Spinning LiDARs with fewer rings than this (the VLP-16) see most map voxels in single rings.
+// Their map points carry the pose uncertainty (lio.map_pose_covariance), which keeps those
+// single-ring lines weak, and a scan goes into the map only from a new viewpoint
+// (lio.map_min_move_m = kViewpointMoveM; estimator/map/insert_gate.hpp): the realistic VLP-16
+// street lost track without either. Models with more rings, and Livox, insert points with their
+// sensor noise only (the pose term tilts long drives), and spinning ones keep single-ring lines
+// out of the planes instead (lio.min_plane_spread_ratio = kPlaneSpreadRatio). Measured:
+// docs/estimator.md "Long drives", "Map insertion from new viewpoints", "Lines are not planes".
+inline constexpr int kFewRings = 32;
 inline constexpr double kViewpointMoveM = 0.5;
+// The points of a plane spread at least twice their noise sigma along its narrower direction.
+inline constexpr double kPlaneSpreadRatio = 4.0;
 
 // A spinning LiDAR with fewer than `rings` rings (false without facts: nothing is known).
 inline bool spinning_with_fewer_rings(const std::optional<LidarModelFacts>& facts, int rings) {

@@ -47,8 +47,19 @@ void read_lio(MapReader& m, estimator::LioParams& lio, std::set<std::string>& gi
   note(m.read("range_limit_m", lio.range_limit_m, closed(0.0, 10000.0)), "range_limit_m");
   note(m.read("dept_err_at_limit", lio.dept_err_at_limit, closed(0.0, 1.0)), "dept_err_at_limit");
   m.read("min_eigen_value", lio.min_eigen_value, left_open(0.0, 1.0));
+  note(m.read("min_plane_spread_ratio", lio.min_plane_spread_ratio, closed(0.0, 100.0)),
+       "min_plane_spread_ratio");
   note(m.read("map_min_move_m", lio.map_min_move_m, closed(0.0, 100.0)), "map_min_move_m");
   note(m.read("map_min_turn_deg", lio.map_min_turn_deg, left_open(0.0, 180.0)), "map_min_turn_deg");
+  if (given.contains("lio.min_plane_spread_ratio") && given.contains("lio.map_pose_covariance") &&
+      lio.min_plane_spread_ratio > 0.0 && lio.map_pose_covariance) {
+    // The spread test compares a plane's points' spread with their covariances; the pose term
+    // in them is common to a scan and spreads nothing, so every plane would fail it.
+    problems.error(ProblemKind::inconsistent, m.child_path("min_plane_spread_ratio"),
+                   m.key_at("min_plane_spread_ratio"),
+                   "needs map_pose_covariance: false (it compares a plane's spread with its "
+                   "points' noise, and the pose uncertainty in them is not noise)");
+  }
   m.read("sigma_num", lio.sigma_num, left_open(0.0, 10.0));
   m.read("voxel_size", lio.voxel_size, closed(0.05, 10.0));
   m.read("max_layer", lio.max_layer, 0, 4);

@@ -53,9 +53,19 @@ Eigen::Matrix<double, 6, 3> jacobian(const Decomposition& dec, const Eigen::Vect
   return J;
 }
 
+// Whether the points' spread along u (an eigenvector of their scatter, eigenvalue `spread`) is
+// at least `ratio` times their mean noise variance along it.
+bool spans(const std::vector<CovPoint>& points, const Eigen::Vector3d& u, double spread,
+           double ratio) {
+  double noise = 0.0;
+  for (const auto& p : points) noise += u.dot(p.cov * u);
+  return spread >= ratio * noise / static_cast<double>(points.size());
+}
+
 }  // namespace
 
-Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value) {
+Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value,
+                double min_spread_ratio) {
   Plane plane;
   plane.points = static_cast<int>(points.size());
   if (points.size() < 3) return plane;
@@ -66,6 +76,11 @@ Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value) {
   plane.d = -plane.normal.dot(plane.center);
   plane.radius = std::sqrt(std::max(0.0, dec.values(2)));
   plane.is_plane = dec.values(0) < min_eigen_value;
+  if (plane.is_plane && min_spread_ratio > 0.0 &&
+      !spans(points, dec.vectors.col(1), dec.values(1), min_spread_ratio)) {
+    plane.is_plane = false;
+    plane.line = true;
+  }
   if (!plane.is_plane) return plane;
   // cov = sum_j J_j C_j J_j^T with J_j = [A_j; I/N]: accumulated per block (nn, nq, qq), which
   // is less than half the work of the full 6x3 products.
@@ -113,6 +128,7 @@ namespace livod::estimator {
 MapPlane map_plane(const Plane& plane) {
   MapPlane m;
   m.is_plane = plane.is_plane;
+  m.line = plane.line;
   m.normal = plane.normal;
   m.d = plane.d;
   m.center = plane.center;

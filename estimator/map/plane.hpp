@@ -23,6 +23,9 @@ struct CovPoint {
 // A fitted plane with its full covariance (the voxel map keeps the reduced MapPlane below).
 struct Plane {
   bool is_plane = false;
+  // Flat, but spread along one direction only beyond the points' noise: a line (one ring's hits in
+  // a voxel), not a plane yet (fit_plane's min_spread_ratio). is_plane is false.
+  bool line = false;
   int points = 0;
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, smallest-eigenvalue eigenvector
   double d = 0.0;                                     // n.x + d = 0 on the plane
@@ -33,7 +36,17 @@ struct Plane {
 };
 
 // Fits `points`; is_plane = smallest eigenvalue < min_eigen_value. Needs >= 3 points.
-Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value);
+//
+// min_spread_ratio > 0 also asks that the points span the plane: their spread along its narrower
+// in-plane direction u (the middle eigenvalue) must be at least min_spread_ratio times their mean
+// noise variance along u (u^T C_j u). Points that fail it are a line made flat by noise, and
+// marked `line` instead: one ring's hits across a voxel scatter only along their rays (the range
+// noise), and the smallest eigenvector is then the normal of the fan of rays - a plane through the
+// sensor, tilted from the surface by the rays' incidence - which the first-order covariance above
+// calls exact, since noise along the rays cannot tilt it (docs/estimator.md "Lines are not
+// planes"). 0: FAST-LIVO2's test alone.
+Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value,
+                double min_spread_ratio = 0.0);
 
 // What the voxel map keeps of a fitted plane for association: the plane, its in-plane extent and
 // its uncertainty reduced to what the point-to-plane variance needs. With e = p - q and
@@ -43,6 +56,7 @@ Plane fit_plane(const std::vector<CovPoint>& points, double min_eigen_value);
 // instead of six (association is bound by memory latency), and the same variance comes out.
 struct MapPlane {
   bool is_plane = false;
+  bool line = false;  // Plane::line
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double d = 0.0;
   Eigen::Vector3d center = Eigen::Vector3d::Zero();

@@ -99,8 +99,14 @@ struct VoxelMap::Node {
   }
 
   void fit(const LioParams& lio) {
-    plane = map_plane(fit_plane(points, lio.min_eigen_value));
+    plane = map_plane(fit_plane(points, lio.min_eigen_value, lio.min_plane_spread_ratio));
     new_points = 0;
+  }
+
+  // Points that are not planar split into the octants below; a line is flat and waits for the
+  // points that span it (the next rings, from the next viewpoints), which its octants would share.
+  bool should_split(const LioParams& lio) const {
+    return !plane.is_plane && !plane.line && layer < lio.max_layer;
   }
 
   void freeze() {
@@ -149,13 +155,13 @@ struct VoxelMap::Node {
       if (static_cast<int>(points.size()) > init_threshold(lio)) {
         initialized = true;
         fit(lio);
-        if (!plane.is_plane && layer < lio.max_layer) split_into_children(lio, change);
+        if (should_split(lio)) split_into_children(lio, change);
       }
       return;
     }
     if (new_points > lio.plane_update_points) {
       fit(lio);
-      if (!plane.is_plane && layer < lio.max_layer) {
+      if (should_split(lio)) {
         split_into_children(lio, change);
         return;
       }
@@ -167,8 +173,9 @@ struct VoxelMap::Node {
     }
     if (static_cast<int>(points.size()) >= lio.max_cov_points) {
       // Store no more: the plane of the stored points (and its covariance) goes on from their
-      // moments. Points that are not planar by now freeze, as FAST-LIVO2 freezes every node at
-      // its last point (splitting them here instead cost the Avia room 8.9 -> 9.8 mm, 3 seeds).
+      // moments. Points that are not planar by now (or still a line) freeze, as FAST-LIVO2
+      // freezes every node at its last point (splitting them here instead cost the Avia room
+      // 8.9 -> 9.8 mm, 3 seeds).
       fit(lio);
       if (!plane.is_plane) {
         freeze();

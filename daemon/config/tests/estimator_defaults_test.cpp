@@ -104,7 +104,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
       "OS1-128",
       "{lio: {point_filter_num: 1, point_budget: 0, dept_err: 0.03, beam_err_deg: 0.2, "
       "filter_size_surf: 0.3, map_pose_covariance: true, max_points_num: 50, map_min_move_m: "
-      "0.25}}"));
+      "0.25, min_plane_spread_ratio: 0}}"));
   ASSERT_TRUE(r.ok()) << dump(r);
   const auto& lio = r.config.estimator.lio;
   EXPECT_EQ(lio.point_filter_num, 1);
@@ -115,6 +115,7 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   EXPECT_TRUE(lio.map_pose_covariance);
   EXPECT_EQ(lio.max_points_num, 50);
   EXPECT_DOUBLE_EQ(lio.map_min_move_m, 0.25);
+  EXPECT_DOUBLE_EQ(lio.min_plane_spread_ratio, 0.0);
   for (const auto& c : r.config.estimator_choices) {
     EXPECT_EQ(c.reason, "set in the configuration") << c.key;
   }
@@ -126,9 +127,10 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
   EXPECT_EQ(one.config.estimator.lio.max_points_num, kDefaultPlanePoints);
 }
 
-// The pose uncertainty goes into the map points of spinning LiDARs with sparse rings only
-// (docs/estimator.md "Long drives": the 16- and 32-ring streets lose track without it, the
-// 64-ring drive tilts with it, Livox rooms are as good or better without it).
+// The pose uncertainty goes into the map points of spinning LiDARs with fewer than 32 rings only
+// (docs/estimator.md "Long drives": the VLP-16 street loses track without it, the 64-ring drive
+// tilts with it, Livox rooms are as good or better without it; the 32-ring streets lost track
+// without it until the plane spread test, "Lines are not planes").
 TEST(EstimatorDefaults, MapPoseCovarianceFollowsTheRings) {
   const auto pose_term = [](const char* model) {
     estimator::EstimatorParams params;
@@ -145,8 +147,9 @@ TEST(EstimatorDefaults, MapPoseCovarianceFollowsTheRings) {
     return params.lio.map_pose_covariance;
   };
   EXPECT_TRUE(pose_term("VLP-16"));
-  EXPECT_TRUE(pose_term("HDL-32E"));
-  EXPECT_TRUE(pose_term("PANDARXT32"));
+  EXPECT_FALSE(pose_term("HDL-32E"));
+  EXPECT_FALSE(pose_term("PANDARXT32"));
+  EXPECT_FALSE(pose_term("OS0-32"));
   EXPECT_FALSE(pose_term("OS1-64"));
   EXPECT_FALSE(pose_term("OS1-128"));
   EXPECT_FALSE(pose_term("AVIA"));
@@ -155,6 +158,62 @@ TEST(EstimatorDefaults, MapPoseCovarianceFollowsTheRings) {
   const auto set = load(ouster_config("OS1-64", "{lio: {map_pose_covariance: true}}"));
   ASSERT_TRUE(set.ok()) << dump(set);
   EXPECT_TRUE(set.config.estimator.lio.map_pose_covariance);
+}
+
+// Lines are not planes (estimator/map/plane.hpp): spinning LiDARs with 32 rings or more, whose
+// map points carry their sensor noise only; off for the VLP-16 (too few planes left: its street
+// loses track), for Livox (no rings, no gain measured) and without facts (FAST-LIVO2).
+TEST(EstimatorDefaults, PlaneSpreadTestFollowsTheRings) {
+  const auto spread = [](const char* model) {
+    estimator::EstimatorParams params;
+    params.lio.min_plane_spread_ratio = 7.0;  // must be overwritten
+    const auto facts = lidar_model_facts(model);
+    const auto choices = estimator_settings_for(facts, model, {}, params);
+    const auto c = std::find_if(choices.begin(), choices.end(), [](const auto& e) {
+      return e.key == "lio.min_plane_spread_ratio";
+    });
+    EXPECT_NE(c, choices.end()) << model;
+    if (c != choices.end()) {
+      EXPECT_EQ(c->value, params.lio.min_plane_spread_ratio > 0.0 ? "4" : "0") << model;
+    }
+    return params.lio.min_plane_spread_ratio;
+  };
+  for (const char* model : {"HDL-32E", "PANDARXT32", "OS0-32", "OS1-64", "OS1-128"}) {
+    EXPECT_DOUBLE_EQ(spread(model), kPlaneSpreadRatio) << model;
+  }
+  for (const char* model : {"VLP-16", "AVIA", "MID-360"}) {
+    EXPECT_DOUBLE_EQ(spread(model), 0.0) << model;
+  }
+  estimator::EstimatorParams unknown;
+  estimator_settings_for(std::nullopt, "XYZ-99", {}, unknown);
+  EXPECT_DOUBLE_EQ(unknown.lio.min_plane_spread_ratio, 0.0);
+  EXPECT_TRUE(unknown.lio.map_pose_covariance);
+
+  // The pose term set in the file turns the test off, and says why.
+  const auto pose = load(ouster_config("OS1-64", "{lio: {map_pose_covariance: true}}"));
+  ASSERT_TRUE(pose.ok()) << dump(pose);
+  EXPECT_DOUBLE_EQ(pose.config.estimator.lio.min_plane_spread_ratio, 0.0);
+  ASSERT_NE(choice(pose.config, "lio.min_plane_spread_ratio"), nullptr);
+  EXPECT_NE(choice(pose.config, "lio.min_plane_spread_ratio")->reason.find("map_pose_covariance"),
+            std::string::npos);
+  // The test set in the file takes the pose term out of the map points, on any model.
+  for (const char* model : {"VLP-16", "XYZ-99"}) {
+    estimator::EstimatorParams params;
+    params.lio.min_plane_spread_ratio = 2.0;
+    const auto choices = estimator_settings_for(lidar_model_facts(model), model,
+                                                {"lio.min_plane_spread_ratio"}, params);
+    EXPECT_FALSE(params.lio.map_pose_covariance) << model;
+    EXPECT_DOUBLE_EQ(params.lio.min_plane_spread_ratio, 2.0) << model;
+    const auto c = std::find_if(choices.begin(), choices.end(),
+                                [](const auto& e) { return e.key == "lio.map_pose_covariance"; });
+    ASSERT_NE(c, choices.end()) << model;
+    EXPECT_NE(c->reason.find("min_plane_spread_ratio is set"), std::string::npos) << c->reason;
+  }
+  // Both set against each other: rejected, with the reason.
+  const auto both = load(
+      ouster_config("OS1-64", "{lio: {map_pose_covariance: true, min_plane_spread_ratio: 4}}"));
+  EXPECT_FALSE(both.ok());
+  EXPECT_NE(dump(both).find("needs map_pose_covariance: false"), std::string::npos) << dump(both);
 }
 
 // Inserting scans from new viewpoints only: the spinning LiDARs with fewer than 32 rings (the
