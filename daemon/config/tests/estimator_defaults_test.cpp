@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
+#include <sstream>
 
 #include "daemon/config/summary.hpp"
 #include "daemon/config/tests/config_test_support.hpp"
@@ -37,6 +39,34 @@ const EstimatorChoice* choice(const LivodConfig& c, const std::string& key) {
     if (ch.key == key) return &ch;
   }
   return nullptr;
+}
+
+// estimator_settings_for(model) without a file's keys, on parameters that `prime` set to values
+// the choices must overwrite: the parameters it leaves and the value it reports for `key` ("" if
+// it reports none).
+struct ModelChoice {
+  estimator::EstimatorParams params;
+  std::string value;
+};
+ModelChoice choose_for(const char* model, const std::string& key,
+                       const std::function<void(estimator::EstimatorParams&)>& prime) {
+  ModelChoice r;
+  prime(r.params);
+  const auto facts = lidar_model_facts(model);
+  for (const auto& c : estimator_settings_for(facts, model, {}, r.params)) {
+    if (c.key == key) r.value = c.value;
+  }
+  return r;
+}
+
+// The value estimator_settings_for(model) chooses for a number of LioParams, set to 7 first (a
+// value every choice overwrites), checked against the value it reports for `key`.
+double chosen(const char* model, const std::string& key, double estimator::LioParams::*field) {
+  const auto r = choose_for(model, key, [field](auto& p) { p.lio.*field = 7.0; });
+  std::ostringstream value;
+  value << r.params.lio.*field;
+  EXPECT_EQ(r.value, value.str()) << model << " " << key;
+  return r.params.lio.*field;
 }
 
 // Every model of every family table with a point rate has facts (Hesai, the other Velodynes and
@@ -133,18 +163,12 @@ TEST(EstimatorDefaults, ExplicitSettingsWin) {
 // without it until the plane spread test, "Lines are not planes").
 TEST(EstimatorDefaults, MapPoseCovarianceFollowsTheRings) {
   const auto pose_term = [](const char* model) {
-    estimator::EstimatorParams params;
-    params.lio.map_pose_covariance = !params.lio.map_pose_covariance;  // must be overwritten
-    const auto facts = lidar_model_facts(model);
-    EXPECT_TRUE(facts.has_value()) << model;
-    const auto choices = estimator_settings_for(facts, model, {}, params);
-    const auto c = std::find_if(choices.begin(), choices.end(),
-                                [](const auto& e) { return e.key == "lio.map_pose_covariance"; });
-    EXPECT_NE(c, choices.end()) << model;
-    if (c != choices.end()) {
-      EXPECT_EQ(c->value, params.lio.map_pose_covariance ? "true" : "false");
-    }
-    return params.lio.map_pose_covariance;
+    EXPECT_TRUE(lidar_model_facts(model).has_value()) << model;
+    const auto r = choose_for(model, "lio.map_pose_covariance", [](auto& p) {
+      p.lio.map_pose_covariance = !p.lio.map_pose_covariance;  // must be overwritten
+    });
+    EXPECT_EQ(r.value, r.params.lio.map_pose_covariance ? "true" : "false") << model;
+    return r.params.lio.map_pose_covariance;
   };
   EXPECT_TRUE(pose_term("VLP-16"));
   EXPECT_FALSE(pose_term("HDL-32E"));
@@ -165,18 +189,8 @@ TEST(EstimatorDefaults, MapPoseCovarianceFollowsTheRings) {
 // loses track), for Livox (no rings, no gain measured) and without facts (FAST-LIVO2).
 TEST(EstimatorDefaults, PlaneSpreadTestFollowsTheRings) {
   const auto spread = [](const char* model) {
-    estimator::EstimatorParams params;
-    params.lio.min_plane_spread_ratio = 7.0;  // must be overwritten
-    const auto facts = lidar_model_facts(model);
-    const auto choices = estimator_settings_for(facts, model, {}, params);
-    const auto c = std::find_if(choices.begin(), choices.end(), [](const auto& e) {
-      return e.key == "lio.min_plane_spread_ratio";
-    });
-    EXPECT_NE(c, choices.end()) << model;
-    if (c != choices.end()) {
-      EXPECT_EQ(c->value, params.lio.min_plane_spread_ratio > 0.0 ? "4" : "0") << model;
-    }
-    return params.lio.min_plane_spread_ratio;
+    return chosen(model, "lio.min_plane_spread_ratio",
+                  &estimator::LioParams::min_plane_spread_ratio);
   };
   for (const char* model : {"HDL-32E", "PANDARXT32", "OS0-32", "OS1-64", "OS1-128"}) {
     EXPECT_DOUBLE_EQ(spread(model), kPlaneSpreadRatio) << model;
@@ -221,17 +235,7 @@ TEST(EstimatorDefaults, PlaneSpreadTestFollowsTheRings) {
 // without facts (FAST-LIVO2).
 TEST(EstimatorDefaults, ViewpointGateFollowsTheRings) {
   const auto min_move = [](const char* model) {
-    estimator::EstimatorParams params;
-    params.lio.map_min_move_m = 7.0;  // must be overwritten
-    const auto facts = lidar_model_facts(model);
-    const auto choices = estimator_settings_for(facts, model, {}, params);
-    const auto c = std::find_if(choices.begin(), choices.end(),
-                                [](const auto& e) { return e.key == "lio.map_min_move_m"; });
-    EXPECT_NE(c, choices.end()) << model;
-    if (c != choices.end()) {
-      EXPECT_EQ(c->value, params.lio.map_min_move_m > 0.0 ? "0.5" : "0") << model;
-    }
-    return params.lio.map_min_move_m;
+    return chosen(model, "lio.map_min_move_m", &estimator::LioParams::map_min_move_m);
   };
   EXPECT_DOUBLE_EQ(min_move("VLP-16"), kViewpointMoveM);
   for (const char* model :
