@@ -138,9 +138,13 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
   // be their sensor noise: the pose term is common to a scan and spreads nothing.
   const bool spread_given =
       given.contains("lio.min_plane_spread_ratio") && lio.min_plane_spread_ratio > 0.0;
-  const std::string spread_needs =
-      "lio.min_plane_spread_ratio is set: map points carry their sensor noise only (the spread "
-      "test compares with it)";
+  // The pose term's value and reason for this model, unless the file sets the spread test.
+  const auto choose_pose_term = [&](bool value, const std::string& reason) {
+    choose("lio.map_pose_covariance", lio.map_pose_covariance, value && !spread_given,
+           spread_given ? "lio.min_plane_spread_ratio is set: map points carry their sensor noise "
+                          "only (the spread test compares with it)"
+                        : reason);
+  };
 
   // The update's cost per frame follows the points it works on: a fixed budget per scan, whatever
   // the sensor and the place, is what keeps every model real-time (lio/point_budget.hpp).
@@ -163,12 +167,8 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
     const std::string no_facts = name + " has no model facts: ";
     keep("lio.dept_err", lio.dept_err, no_facts + "FAST-LIVO2's range noise");
     keep("lio.beam_err_deg", lio.beam_err_deg, no_facts + "FAST-LIVO2's bearing noise");
-    if (spread_given) {
-      choose("lio.map_pose_covariance", lio.map_pose_covariance, false, spread_needs);
-    } else {
-      keep("lio.map_pose_covariance", lio.map_pose_covariance,
-           no_facts + "FAST-LIVO2's (map points carry the pose uncertainty)");
-    }
+    choose_pose_term(lio.map_pose_covariance,
+                     no_facts + "FAST-LIVO2's (map points carry the pose uncertainty)");
     keep("lio.min_plane_spread_ratio", lio.min_plane_spread_ratio,
          no_facts + "FAST-LIVO2's planarity test alone");
     keep("lio.map_min_move_m", lio.map_min_move_m,
@@ -204,17 +204,13 @@ std::vector<EstimatorChoice> estimator_settings_for(const std::optional<LidarMod
   const std::string rings = std::to_string(facts->beams) + " rings";
   // "OS1-128 has 128 rings" / "AVIA scans a dense rosette"
   const std::string scans = name + (facts->spinning ? " has " + rings : " scans a dense rosette");
-  if (spread_given) {
-    choose("lio.map_pose_covariance", lio.map_pose_covariance, false, spread_needs);
-  } else {
-    choose("lio.map_pose_covariance", lio.map_pose_covariance, few_rings,
-           few_rings ? name + "'s " + rings +
-                           ": map points carry the pose uncertainty (its single-ring lines stay "
-                           "weak; a street drive without it loses track)"
-                     : scans +
-                           ": map points carry their sensor noise only (the pose term tilts "
-                           "long drives)");
-  }
+  choose_pose_term(few_rings,
+                   few_rings ? name + "'s " + rings +
+                                   ": map points carry the pose uncertainty (its single-ring lines "
+                                   "stay weak; a street drive without it loses track)"
+                             : scans +
+                                   ": map points carry their sensor noise only (the pose term "
+                                   "tilts long drives)");
   // One ring's hits across a voxel look flat under range noise (a plane through the sensor):
   // not planes (estimator/map/plane.hpp; the OS1-128 street 19.5 -> 11.6 mm, the HDL-32E's
   // 21.4 -> 9.9 mm). Livox's rosette draws no rings: measured no better (the Avia room 13.8 ->

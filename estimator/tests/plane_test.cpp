@@ -9,6 +9,7 @@
 #include <random>
 
 #include "estimator/map/point_covariance.hpp"
+#include "estimator/tests/support/road_ring.hpp"
 
 namespace livod::estimator {
 namespace {
@@ -284,34 +285,14 @@ TEST(PointCovariance, RangeAlongTheRayBearingAcrossIt) {
   EXPECT_NEAR(S_head_on(0, 0), S(0, 0), 1e-12);
 }
 
-// One ring of a spinning LiDAR across a 0.5 m voxel of road 10 m ahead: its hits lie on a short
-// arc, scattered only along their rays by the range noise. FAST-LIVO2's planarity test takes them
-// for a plane - the fan of rays, tilted from the road by the rays' incidence, with a covariance
-// that calls it exact - which pulls the next scans' points towards the viewpoint it was seen from
-// (estimator/map/plane.hpp). The spread test marks them a line; the next ring makes them a plane.
-std::vector<CovPoint> road_ring(std::mt19937& rng, double range, int n) {
-  const Eigen::Vector3d sensor(0.0, 0.0, 1.8);  // above the road z = 0
-  PointNoise noise;
-  noise.range_sigma_m = 0.015;
-  noise.bearing_sigma_rad = 0.065 * std::numbers::pi / 180.0;
-  std::normal_distribution<double> g(0.0, noise.range_sigma_m);
-  std::vector<CovPoint> pts;
-  for (int i = 0; i < n; ++i) {
-    // Across the voxel: y in [-0.24, 0.24] at the ring's ground range.
-    const double y = -0.24 + 0.48 * i / (n - 1);
-    const Eigen::Vector3d hit(std::sqrt(range * range - y * y), y, 0.0);
-    const Eigen::Vector3d ray = (hit - sensor).normalized();
-    CovPoint c;
-    c.p = hit + g(rng) * ray;
-    c.cov = point_covariance(hit - sensor, noise);  // sensor axes = world axes here
-    pts.push_back(c);
-  }
-  return pts;
-}
-
+// One ring of a spinning LiDAR across a 0.5 m voxel of road 10 m ahead (test_support::road_ring):
+// FAST-LIVO2's planarity test takes its hits for a plane - the fan of rays, tilted from the road
+// by the rays' incidence, with a covariance that calls it exact - which pulls the next scans'
+// points towards the viewpoint it was seen from (estimator/map/plane.hpp). The spread test marks
+// them a line; the next ring makes them a plane.
 TEST(Plane, OneRingAcrossAVoxelIsALineNotAPlane) {
   std::mt19937 rng(3);
-  const auto ring = road_ring(rng, 10.0, 30);
+  const auto ring = test_support::road_ring(rng, {});
   // FAST-LIVO2's test alone: a plane, its normal tilted from the road's by the incidence (the
   // rays meet the road at atan(1.8 / 10) = 10.2 deg).
   const Plane fan = fit_plane(ring, 0.0025);
@@ -324,7 +305,7 @@ TEST(Plane, OneRingAcrossAVoxelIsALineNotAPlane) {
   EXPECT_TRUE(line.line);
   // With the next ring, 0.3 m farther, they span the road: a plane, level within a degree.
   auto both = ring;
-  const auto next = road_ring(rng, 10.3, 30);
+  const auto next = test_support::road_ring(rng, {.range_m = 10.3});
   both.insert(both.end(), next.begin(), next.end());
   const Plane road = fit_plane(both, 0.0025, 4.0);
   ASSERT_TRUE(road.is_plane);

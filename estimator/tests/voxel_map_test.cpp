@@ -6,6 +6,8 @@
 #include <cmath>
 #include <random>
 
+#include "estimator/tests/support/road_ring.hpp"
+
 namespace livod::estimator {
 namespace {
 
@@ -99,25 +101,6 @@ TEST(VoxelMap, APlanePastItsStoredPointsKeepsLearningFromTheirMoments) {
   EXPECT_LT(frozen_at_1000, 0.4 * frozen_at_50);
 }
 
-// One ring's hits across a voxel of road (z = 0.25, the sensor 1.8 m above it at the origin),
-// scattered along their rays by 1.5 cm of range noise: y in (0, 0.5) keeps them in one root voxel.
-std::vector<CovPoint> road_ring(std::mt19937& rng, double range, int n) {
-  const Eigen::Vector3d sensor(0.0, 0.0, 2.05);
-  std::normal_distribution<double> g(0.0, 0.015);
-  std::vector<CovPoint> out;
-  for (int i = 0; i < n; ++i) {
-    const double y = 0.02 + 0.46 * i / (n - 1);
-    const Eigen::Vector3d hit(std::sqrt(range * range - y * y), y, 0.25);
-    const Eigen::Vector3d ray = (hit - sensor).normalized();
-    CovPoint p;
-    p.p = hit + g(rng) * ray;
-    p.cov = 0.015 * 0.015 * ray * ray.transpose() +
-            1e-6 * (Eigen::Matrix3d::Identity() - ray * ray.transpose());
-    out.push_back(p);
-  }
-  return out;
-}
-
 // A voxel crossed by one ring holds a line, not a plane (plane.hpp, min_plane_spread_ratio): it
 // matches nothing and is not split, and the next ring through it makes it the road's plane.
 TEST(VoxelMap, OneRingIsALineUntilTheNextRingSpansTheVoxel) {
@@ -126,13 +109,17 @@ TEST(VoxelMap, OneRingIsALineUntilTheNextRingSpansTheVoxel) {
   MapParams map;
   VoxelMap vm(lio, map);
   std::mt19937 rng(6);
-  vm.insert(road_ring(rng, 9.6, 40));
+  // A ring across one root voxel of road at z = 0.25 (off the voxel faces), y in (0, 0.5).
+  test_support::RoadRing ring{
+      .range_m = 9.6, .road_z_m = 0.25, .y_begin_m = 0.02, .y_end_m = 0.48, .points = 40};
+  vm.insert(test_support::road_ring(rng, ring));
   PlaneMatch m;
   const Eigen::Matrix3d cov = Eigen::Matrix3d::Identity() * 1e-4;
   EXPECT_FALSE(vm.match({9.8, 0.25, 0.25}, cov, m));
   EXPECT_EQ(vm.stats().planes, 0u);
   EXPECT_EQ(vm.stats().nodes, 1u);  // waits whole for the points that span it
-  vm.insert(road_ring(rng, 9.9, 40));
+  ring.range_m = 9.9;
+  vm.insert(test_support::road_ring(rng, ring));
   ASSERT_TRUE(vm.match({9.8, 0.25, 0.25}, cov, m));
   EXPECT_EQ(vm.stats().planes, 1u);
   EXPECT_GT(std::abs(m.plane->normal.z()), 0.999);
