@@ -19,6 +19,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -51,6 +52,17 @@ const std::string kExtrinsic =
 const std::string kLidar =
     "  - {name: vlp, driver: velodyne, model: VLP-16, source: {udp: {}},\n"
     "     extrinsic: {translation: [0, 0, 0], rotation: {rpy_deg: [0, 0, 0]}}}\n";
+
+// Polls until `done` holds or `timeout` passes, pausing `pause` and then running `between` (a
+// source's drain) each round. The caller asserts the outcome, with its own message.
+void wait_until(std::chrono::milliseconds timeout, std::chrono::milliseconds pause,
+                const std::function<bool()>& done, const std::function<void()>& between = {}) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!done() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(pause);
+    if (between) between();
+  }
+}
 
 LivodConfig load_file(const std::filesystem::path& path, const std::string& yaml) {
   std::ofstream(path) << yaml;
@@ -166,11 +178,8 @@ TEST(RecordImu, ACanImuIsRecordedAsACandumpLogThatReplaysTheSameSamples) {
       poll();
     }
   }
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (captured.size() < kSamples && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(2ms);
-    poll();
-  }
+  wait_until(
+      10s, 2ms, [&] { return captured.size() >= kSamples; }, poll);
   ASSERT_EQ(captured.size(), static_cast<std::size_t>(kSamples));
   live.stop();
   EXPECT_TRUE(session.finish().empty());
@@ -222,11 +231,7 @@ TEST(RecordImu, ASerialImuIsRecordedAsASerialCaptureThatReplaysTheSameSamples) {
   auto live = runtime::open_live_imu(sensor, config, nullptr, &session.recorder());
   session.start();
   ::close(slave);  // the source holds its own descriptor
-  const auto streaming_by = std::chrono::steady_clock::now() + 5s;
-  while (live->health(host_now())->device_state != "STREAMING" &&
-         std::chrono::steady_clock::now() < streaming_by) {
-    std::this_thread::sleep_for(10ms);
-  }
+  wait_until(5s, 10ms, [&] { return live->health(host_now())->device_state == "STREAMING"; });
   ASSERT_EQ(live->health(host_now())->device_state, "STREAMING");
 
   constexpr int kSamples = 120;
@@ -253,10 +258,7 @@ TEST(RecordImu, ASerialImuIsRecordedAsASerialCaptureThatReplaysTheSameSamples) {
     if (cut < m.size()) {
       // Everything up to the tear is read (and recorded) before the rest is written: waiting on
       // the recorder, not on a sleep, keeps every tear the end of a read on a loaded machine.
-      const auto read_by = std::chrono::steady_clock::now() + 5s;
-      while (recorded_bytes() < written && std::chrono::steady_clock::now() < read_by) {
-        std::this_thread::sleep_for(1ms);
-      }
+      wait_until(5s, 1ms, [&] { return recorded_bytes() >= written; });
       ASSERT_EQ(recorded_bytes(), written) << "message " << k << " torn";
       ASSERT_EQ(::write(master, m.data() + cut, m.size() - cut),
                 static_cast<ssize_t>(m.size() - cut));
@@ -264,11 +266,8 @@ TEST(RecordImu, ASerialImuIsRecordedAsASerialCaptureThatReplaysTheSameSamples) {
     }
     drain();
   }
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (captured.size() < kSamples && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(2ms);
-    drain();
-  }
+  wait_until(
+      10s, 2ms, [&] { return captured.size() >= kSamples; }, drain);
   ASSERT_EQ(captured.size(), static_cast<std::size_t>(kSamples));
   live->stop();
   EXPECT_TRUE(session.finish().empty());
