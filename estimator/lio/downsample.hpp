@@ -9,7 +9,10 @@
 // against the map (measured against a map built from true poses, street, OS1-64, 0.5 m cells:
 // -1.2 mm along the motion and +0.0006 deg of pitch per scan; the 15-minute drive sank 17-20 m and
 // fell short along the road). A measured point lies on a surface; the one nearest to the centroid
-// keeps the grid's even spread and, on a plane, its noise is as likely above as below.
+// keeps the grid's even spread and, on a plane with noise along its normal, its noise is as likely
+// above as below. Range noise along slanted rays is another matter: which point is nearest then
+// depends on where the noise moved it, a selection that tilts long drives (docs/estimator.md,
+// "Long drives": the mechanism and the hash choice measured against it; not changed yet).
 //
 // Which point a cell keeps depends on the set of points only, not on their order: the centroid is
 // an exact integer sum of coordinates quantised to kQuantumM (floating-point sums in arrival order
