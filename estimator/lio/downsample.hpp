@@ -12,7 +12,7 @@
 // keeps the grid's even spread and, on a plane with noise along its normal, its noise is as likely
 // above as below. Range noise along slanted rays is another matter: which point is nearest then
 // depends on where the noise moved it, a selection that tilts long drives (docs/estimator.md,
-// "Long drives": the mechanism and the hash choice measured against it; not changed yet).
+// "Long drives", "Which point a scan cell keeps").
 //
 // Which point a cell keeps depends on the set of points only, not on their order: the centroid is
 // an exact integer sum of coordinates quantised to kQuantumM (floating-point sums in arrival order
