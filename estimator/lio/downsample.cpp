@@ -1,6 +1,7 @@
 #include "estimator/lio/downsample.hpp"
 
 #include <cmath>
+#include <tuple>
 
 #include "core/hash_mix.hpp"
 #include "estimator/grid_index.hpp"
@@ -10,6 +11,23 @@ namespace livod::estimator {
 std::array<std::int64_t, 3> quantise(const Eigen::Vector3d& p, double inv_quantum) {
   return {floor_to_int(p.x() * inv_quantum + 0.5), floor_to_int(p.y() * inv_quantum + 0.5),
           floor_to_int(p.z() * inv_quantum + 0.5)};
+}
+
+namespace {
+
+bool lexicographically_less(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+}
+
+}  // namespace
+
+std::uint64_t selection_rank(const std::array<std::int64_t, 3>& q) {
+  // Chained splitmix64 over the three coordinates, salted so that it is independent of
+  // point_filter_keeps (which hashes packed millimetre coordinates with the same finaliser).
+  constexpr std::uint64_t kSalt = 0x6a09e667f3bcc909ULL;
+  std::uint64_t h = hash_mix(static_cast<std::uint64_t>(q[0]) ^ kSalt);
+  h = hash_mix(h ^ static_cast<std::uint64_t>(q[1]));
+  return hash_mix(h ^ static_cast<std::uint64_t>(q[2]));
 }
 
 void VoxelGridDownsampler::reserve_slots(std::size_t points) {
@@ -36,10 +54,8 @@ bool VoxelGridDownsampler::choose(const std::vector<Eigen::Vector3d>& points) {
     generation_ = 1;
   }
   cells_.clear();
-  cell_of_point_.resize(points.size());
   const std::size_t mask = slots_.size() - 1;
   constexpr double kInvQuantum = 1.0 / kQuantumM;
-  // 1. Cells and their centroids, from exact integer sums (independent of the points' order).
   for (std::size_t k = 0; k < points.size(); ++k) {
     const Eigen::Vector3d& p = points[k];
     // 21 bits per axis (+-1M cells, +-104 km at 0.1 m) packed into one key.
@@ -56,30 +72,14 @@ bool VoxelGridDownsampler::choose(const std::vector<Eigen::Vector3d>& points) {
       slot = Slot{key, generation_, static_cast<std::uint32_t>(cells_.size())};
       cells_.push_back(Cell{});
     }
+    // The point of smallest rank; of equal ranks (points within kQuantumM of each other, or a
+    // 64-bit collision) the one with the smallest coordinates (not the first: order-free).
     Cell& c = cells_[slot.cell];
-    const auto q = quantise(p, kInvQuantum);
-    for (int a = 0; a < 3; ++a) c.sum[a] += q[a];
-    ++c.count;
-    cell_of_point_[k] = slot.cell;
-  }
-  for (Cell& c : cells_) {
-    const double n = static_cast<double>(c.count);
-    c.centroid =
-        Eigen::Vector3d(static_cast<double>(c.sum[0]) / n, static_cast<double>(c.sum[1]) / n,
-                        static_cast<double>(c.sum[2]) / n);
-  }
-  // 2. The measured point nearest to its cell's centroid, in quantised coordinates; of equally
-  // near points the one with the smallest quantised coordinates (not the first: order-free).
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    Cell& c = cells_[cell_of_point_[k]];
-    const auto q = quantise(points[k], kInvQuantum);
-    const Eigen::Vector3d d(static_cast<double>(q[0]) - c.centroid.x(),
-                            static_cast<double>(q[1]) - c.centroid.y(),
-                            static_cast<double>(q[2]) - c.centroid.z());
-    const double d2 = d.squaredNorm();
-    if (d2 < c.best_d2 || (d2 == c.best_d2 && q < c.best_q)) {
-      c.best_d2 = d2;
-      c.best_q = q;
+    const std::uint64_t rank = selection_rank(quantise(p, kInvQuantum));
+    if (c.empty || rank < c.best_rank ||
+        (rank == c.best_rank && lexicographically_less(p, points[c.best]))) {
+      c.empty = false;
+      c.best_rank = rank;
       c.best = static_cast<std::uint32_t>(k);
     }
   }

@@ -1,24 +1,28 @@
 #pragma once
 // Voxel-grid downsampling of a scan (FAST-LIVO2 filter_size_surf): one point per occupied cell,
-// the measured point nearest to the cell's centroid.
+// a measured point chosen blind to where the noise put it.
 //
 // Not the centroid itself (PCL VoxelGrid, FAST-LIVO2): in a cell that holds an edge, a corner, a
 // pole or a crown the centroid lies off every surface, and where it lies depends on how the
 // viewpoint samples the cell. Driving forward, every such cell is seen first from ahead, then from
 // the side, so the phantom points moved consistently with the motion and biased the registration
 // against the map (measured against a map built from true poses, street, OS1-64, 0.5 m cells:
-// -1.2 mm along the motion and +0.0006 deg of pitch per scan; the 15-minute drive sank 17-20 m and
-// fell short along the road). A measured point lies on a surface; the one nearest to the centroid
-// keeps the grid's even spread and, on a plane with noise along its normal, its noise is as likely
-// above as below. Range noise along slanted rays is another matter: which point is nearest then
-// depends on where the noise moved it, a selection that tilts long drives (docs/estimator.md,
-// "Long drives", "Which point a scan cell keeps").
+// -1.2 mm along the motion and +0.0006 deg of pitch per scan; the 15-minute drive sank 17-20 m).
+// A measured point lies on a surface.
 //
-// Which point a cell keeps depends on the set of points only, not on their order: the centroid is
-// an exact integer sum of coordinates quantised to kQuantumM (floating-point sums in arrival order
-// differ in the last bits between two orders, and so could the nearest point), and equally near
-// points are told apart by their quantised coordinates, not by their index. The same scan delivered
-// by another container (bag, pcap, folder) or cut at another packet then keeps the same points.
+// Nor the measured point nearest to the centroid (livod up to stop 29): where each point lies in
+// its cell depends on where the range noise moved it, so any rule that chooses by position selects
+// on the noise. Against a map built from true poses (street, OS1-64, 0.15 m cells) the nearest to
+// the centroid tilted every scan's pitch by +22 urad, the nearest by direction by -22 urad, the
+// first in scan order by +3.6 urad (and -14 urad of yaw); the 15-minute street drive climbed 14 m.
+// The kept point is the one of smallest selection_rank(): a hash of its quantised coordinates,
+// uniform over the cell's points and blind to the geometry, so the kept points carry the noise of
+// all points (+1.0 urad there; docs/estimator.md, "Long drives", "Which point a scan cell keeps").
+//
+// Which point a cell keeps depends on the set of points only, not on their order: the rank is a
+// function of the point's coordinates quantised to kQuantumM, and equal ranks are told apart by
+// the coordinates, not by the index. The same scan delivered by another container (bag,
+// pcap, folder) or cut at another packet then keeps the same points.
 //
 // The cell table is kept between calls so that steady state does not allocate: an
 // open-addressing table of packed cell keys whose slots are stamped with the call's generation,
@@ -27,21 +31,20 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
-#include <limits>
 #include <vector>
 
 namespace livod::estimator {
 
 class VoxelGridDownsampler {
  public:
-  // The coordinate quantum of the centroid sums (0.1 mm: far below any LiDAR's range noise; an
-  // int64 sum of 2^20 points of +-10 km each stays exact).
+  // The coordinate quantum of the selection rank (0.1 mm: far below any LiDAR's range noise, so
+  // distinct returns have distinct coordinates).
   static constexpr double kQuantumM = 1e-4;
 
   explicit VoxelGridDownsampler(double cell_size)
       : cell_(cell_size), inv_cell_(cell_size > 0.0 ? 1.0 / cell_size : 0.0) {}
 
-  // Replaces `points` by one point per cell (the one nearest to the cell's centroid), cells in
+  // Replaces `points` by one point per cell (the one of smallest selection_rank), cells in
   // order of first appearance (so the output is deterministic). cell_size <= 0 leaves the points
   // unchanged.
   void apply(std::vector<Eigen::Vector3d>& points);
@@ -64,12 +67,9 @@ class VoxelGridDownsampler {
     std::uint32_t cell = 0;        // index into cells_
   };
   struct Cell {
-    std::array<std::int64_t, 3> sum{0, 0, 0};  // quantised coordinates
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    double best_d2 = std::numeric_limits<double>::infinity();
-    std::array<std::int64_t, 3> best_q{0, 0, 0};  // quantised coordinates of the point kept
+    std::uint64_t best_rank = 0;
     std::uint32_t best = 0;  // index (into the call's points) of the point kept
-    int count = 0;
+    bool empty = true;
   };
   void reserve_slots(std::size_t points);
   // Fills best of each cell of `points` into cells_ (cells in order of first appearance); false
@@ -80,11 +80,14 @@ class VoxelGridDownsampler {
   double inv_cell_;
   std::vector<Slot> slots_;
   std::vector<Cell> cells_;
-  std::vector<std::uint32_t> cell_of_point_;
   std::uint32_t generation_ = 0;
 };
 
 // The coordinates of p quantised to `quantum` (rounded to the nearest multiple).
 std::array<std::int64_t, 3> quantise(const Eigen::Vector3d& p, double inv_quantum);
+
+// The rank by which a cell chooses its point: a hash of the point's quantised coordinates, the
+// same for the same point in any scan and uniform over the points of a cell.
+std::uint64_t selection_rank(const std::array<std::int64_t, 3>& q);
 
 }  // namespace livod::estimator

