@@ -68,19 +68,19 @@ bool VoxelGridDownsampler::choose(const std::vector<Eigen::Vector3d>& points) {
     std::size_t i = hash_mix(key) & mask;
     while (slots_[i].generation == generation_ && slots_[i].key != key) i = (i + 1) & mask;
     Slot& slot = slots_[i];
-    if (slot.generation != generation_) {
+    const std::uint64_t rank = selection_rank(quantise(p, kInvQuantum));
+    const auto index = static_cast<std::uint32_t>(k);
+    if (slot.generation != generation_) {  // a new cell: its first point is its best so far
       slot = Slot{key, generation_, static_cast<std::uint32_t>(cells_.size())};
-      cells_.push_back(Cell{});
+      cells_.push_back(Cell{rank, index});
+      continue;
     }
     // The point of smallest rank; of equal ranks (points within kQuantumM of each other, or a
     // 64-bit collision) the one with the smallest coordinates (not the first: order-free).
     Cell& c = cells_[slot.cell];
-    const std::uint64_t rank = selection_rank(quantise(p, kInvQuantum));
-    if (c.empty || rank < c.best_rank ||
-        (rank == c.best_rank && lexicographically_less(p, points[c.best]))) {
-      c.empty = false;
+    if (rank < c.best_rank || (rank == c.best_rank && lexicographically_less(p, points[c.best]))) {
       c.best_rank = rank;
-      c.best = static_cast<std::uint32_t>(k);
+      c.best = index;
     }
   }
   return true;

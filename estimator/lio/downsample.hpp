@@ -74,7 +74,6 @@ class VoxelGridDownsampler {
   struct Cell {
     std::uint64_t best_rank = 0;
     std::uint32_t best = 0;  // index (into the call's points) of the point kept
-    bool empty = true;
   };
   void reserve_slots(std::size_t points);
   // Fills best of each cell of `points` into cells_ (cells in order of first appearance); false
