@@ -63,6 +63,41 @@ void match_sparse_beside_dense(LivodConfig& config) {
   }
 }
 
+// The settings of how the map is built follow the model of a LiDAR that builds it: when the
+// estimator LiDAR is matched only (a VLP-16 beside an Avia), the map is the other LiDAR's, and the
+// VLP-16's pose term in the map points cost the street pair what the Avia alone does not pay
+// (docs/estimator.md "Several LiDARs": seeds 1-5 8.4 / 8.4 / 11.4 / 24.8 / 7.9 mm with the
+// VLP-16's choice, 6.8 / 8.2 / 8.3 / 6.8 / 7.4 mm with the Avia's).
+void follow_the_map_builder(LivodConfig& config, int lidar,
+                            const estimator::EstimatorParams& file_values) {
+  const SensorConfig& own = config.sensors[static_cast<std::size_t>(lidar)];
+  if (own.lio.build_map) return;
+  for (const SensorConfig& s : config.sensors) {
+    if (!enabled_lidar(s) || !s.lio.build_map) continue;
+    const auto facts = lidar_model_facts(s.model);
+    if (!facts) continue;
+    estimator::EstimatorParams builder = file_values;
+    const auto choices = estimator_settings_for(facts, s.model, config.estimator_given, builder);
+    const std::string why = " (" + s.name + " builds the map; " + own.name + " is matched only)";
+    for (const EstimatorChoice& from : choices) {
+      if (config.estimator_given.contains(from.key)) continue;
+      if (from.key == "lio.map_pose_covariance") {
+        config.estimator.lio.map_pose_covariance = builder.lio.map_pose_covariance;
+      } else if (from.key == "lio.min_plane_spread_ratio") {
+        config.estimator.lio.min_plane_spread_ratio = builder.lio.min_plane_spread_ratio;
+      } else {  // the point model is per LiDAR; the viewpoint gate takes one LiDAR (below)
+        continue;
+      }
+      for (EstimatorChoice& c : config.estimator_choices) {
+        if (c.key != from.key) continue;
+        c.value = from.value;
+        c.reason = from.reason + why;
+      }
+    }
+    return;
+  }
+}
+
 }  // namespace
 
 std::optional<LidarModelFacts> lidar_model_facts(std::string_view model) {
@@ -279,6 +314,7 @@ void apply_estimator_defaults(LivodConfig& config) {
     fill("point_filter_num", s.lio.point_filter_num, own.lio.point_filter_num);
   }
   match_sparse_beside_dense(config);
+  follow_the_map_builder(config, lidar, file_values);
   // The viewpoint gate takes whole scans of one LiDAR (estimator/map/insert_gate.hpp); with
   // several, every group goes into the map. A file that sets it with several LiDARs is rejected
   // (checks.cpp).

@@ -62,7 +62,9 @@ int estimator_lidar_index(const LivodConfig& config);
 // value holds for it, as without defaults). The point budget is one for the estimator: it counts
 // the points of every LiDAR in an update (docs/estimator.md "Several LiDARs").
 // A sparse spinning LiDAR (sparse_spinning) beside a LiDAR that is not and builds the map is
-// matched only (lio.build_map false) unless its own lio: sets build_map.
+// matched only (lio.build_map false) unless its own lio: sets build_map. When the estimator LiDAR
+// is then matched only, how the map is built (lio.map_pose_covariance, lio.min_plane_spread_ratio)
+// follows the first LiDAR that builds it, and its reason says so.
 void apply_estimator_defaults(LivodConfig& config);
 
 // Per-scan points the update works on (lio.point_budget) and the raw points per scan the point

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 
 #include "daemon/config/estimator_defaults.hpp"
 #include "daemon/config/load_config.hpp"
@@ -174,6 +175,43 @@ TEST(LidarLioConfig, SparseLidarBesideADenserOneIsMatchedOnlyByDefault) {
     EXPECT_TRUE(alone.config.sensors.at(0).lio.build_map) << avia;
     EXPECT_FALSE(alone.config.sensors.at(0).lio_from_model.contains("build_map")) << avia;
   }
+}
+
+// The VLP-16 is the estimator LiDAR (the first one) but matched only: how the map is built follows
+// the Avia that builds it (the street pair: 7.5 mm mean over seeds 1-5 so, 12.2 mm with the
+// VLP-16's pose term; docs/estimator.md "Several LiDARs").
+TEST(LidarLioConfig, TheMapSettingsFollowTheLidarThatBuildsTheMap) {
+  const auto choice = [](const LivodConfig& c, const std::string& key) {
+    const auto it = std::find_if(c.estimator_choices.begin(), c.estimator_choices.end(),
+                                 [&](const EstimatorChoice& e) { return e.key == key; });
+    return it == c.estimator_choices.end() ? EstimatorChoice{} : *it;
+  };
+  const auto pair = load(two_lidars(""));
+  ASSERT_TRUE(pair.problems.empty()) << dump(pair);
+  EXPECT_FALSE(pair.config.estimator.lio.map_pose_covariance);
+  EXPECT_DOUBLE_EQ(pair.config.estimator.lio.min_plane_spread_ratio, 0.0);
+  const EstimatorChoice pose = choice(pair.config, "lio.map_pose_covariance");
+  EXPECT_EQ(pose.value, "false");
+  EXPECT_NE(pose.reason.find("AVIA scans a dense rosette"), std::string::npos) << pose.reason;
+  EXPECT_NE(pose.reason.find("(avia builds the map; vlp16 is matched only)"), std::string::npos)
+      << pose.reason;
+
+  // The VLP-16 building the map itself (told so, or with the Avia disabled): its own choice.
+  const std::pair<std::string, std::string> builds_own_map[] = {
+      {"    lio: {build_map: true}\n", ""}, {"", "    enabled: false\n"}};
+  for (const auto& [vlp16, avia] : builds_own_map) {
+    const auto own = load(two_lidars(vlp16, avia));
+    ASSERT_TRUE(own.problems.empty()) << dump(own);
+    EXPECT_TRUE(own.config.estimator.lio.map_pose_covariance) << vlp16 << avia;
+    EXPECT_NE(choice(own.config, "lio.map_pose_covariance").reason.find("VLP-16's 16 rings"),
+              std::string::npos);
+  }
+
+  // A value of the file wins.
+  const auto told = load(two_lidars("", "", "", "estimator: {lio: {map_pose_covariance: true}}\n"));
+  ASSERT_TRUE(told.problems.empty()) << dump(told);
+  EXPECT_TRUE(told.config.estimator.lio.map_pose_covariance);
+  EXPECT_EQ(choice(told.config, "lio.map_pose_covariance").reason, "set in the configuration");
 }
 
 // Inserting scans from new viewpoints only (lio.map_min_move_m) skips whole groups, and with
