@@ -66,8 +66,10 @@ void SensorClockMapper::map_scan(LidarScan& scan) {
   // receive_time has no sensor clock to map: every scan is stamped from its own receive time.
   const bool imu_feeds = have_imu_ && scan.start.host - last_imu_host_ < kImuSilence &&
                          domain_.config().mode != livod::ClockMode::receive_time;
-  // Drivers stamp the scan with the receive time of its first packet and the sensor time of its
-  // first point (Livox back-dates the receive time to the scan start): no accumulation latency.
+  // Drivers stamp the scan with the sensor time of its first point and the receive time of the
+  // packet holding it, back-dated to that point by the firings after it in the packet (the packet
+  // leaves when its last firing is done; Livox back-dates to the scan start): no accumulation
+  // latency is left for the clock model.
   const MappedTime t = imu_feeds ? domain_.map(scan.start.sensor)
                                  : domain_.observe(scan.start.sensor, scan.start.host);
   scan.start.mapped = with_offset(t);

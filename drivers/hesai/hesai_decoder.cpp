@@ -80,9 +80,17 @@ void HesaiDecoder::on_packet(const PacketView& packet, const DecoderSinks& sinks
   const bool dual = packet_.returns == 2;
   std::array<std::int32_t, kMaxBlocks> delay{};
   block_delays(dual, delay);
+  // The packet leaves once its last round has fired: a point's receive time is the packet's less
+  // the time from the point to then (a clock fed by scans alone would otherwise carry up to a
+  // packet of accumulation, varying with where the scan was cut; docs/clocks.md).
+  std::int32_t last_firing_ns = timing_.offset_ns(dual, traits_.blocks - 1, 0);
+  for (int c = 1; c < traits_.channels; ++c) {
+    last_firing_ns = std::max(last_firing_ns, timing_.offset_ns(dual, traits_.blocks - 1, c));
+  }
+  const std::int64_t rx_minus_sensor = packet.host_time_ns - packet_.timestamp_ns - last_firing_ns;
   for (int b = 0; b < traits_.blocks; ++b) {
-    add_block(b, dual, delay[static_cast<std::size_t>(b)], packet_.timestamp_ns,
-              packet.host_time_ns, sinks);
+    add_block(b, dual, delay[static_cast<std::size_t>(b)], packet_.timestamp_ns, rx_minus_sensor,
+              sinks);
   }
 }
 
@@ -171,7 +179,7 @@ void HesaiDecoder::block_delays(bool dual, std::array<std::int32_t, kMaxBlocks>&
 }
 
 void HesaiDecoder::add_block(int block, bool dual, std::int32_t delay, std::int64_t packet_ns,
-                             std::int64_t host_ns, const DecoderSinks& sinks) {
+                             std::int64_t rx_minus_sensor, const DecoderSinks& sinks) {
   const std::uint16_t azimuth = packet_.azimuth[static_cast<std::size_t>(block)];
   const int phase = (kTurn + azimuth - cut_centideg_) % kTurn;
   const std::int64_t block_start = packet_ns + timing_.block_start_ns(dual, block) + delay;
@@ -258,8 +266,8 @@ void HesaiDecoder::add_block(int block, bool dual, std::int32_t delay, std::int6
       while (turn > turn_ + 1) advance_turn(sinks);
       if (turn == turn_ + 1) target = &assemblies_[static_cast<std::size_t>(1 - current_)];
     }
-    append(*target, block_start, host_ns, t, x, y, z, static_cast<float>(reflectivity), ch.ring,
-           return_index);
+    append(*target, block_start, rx_minus_sensor, t, x, y, z, static_cast<float>(reflectivity),
+           ch.ring, return_index);
   }
   // Every point of the open turn has come once this block's smallest angle is past the cut.
   if (!by_time && static_cast<double>(block_turn_) * kTurn + phase + min_correction_centideg_ >=
@@ -268,14 +276,14 @@ void HesaiDecoder::add_block(int block, bool dual, std::int32_t delay, std::int6
   }
 }
 
-void HesaiDecoder::append(Assembly& a, std::int64_t block_start_ns, std::int64_t host_ns,
+void HesaiDecoder::append(Assembly& a, std::int64_t block_start_ns, std::int64_t rx_minus_sensor,
                           std::int64_t t_ns, float x, float y, float z, float intensity,
                           std::uint16_t ring, std::uint8_t return_index) {
   LidarScan& s = a.scan;
   if (s.empty()) {
     s.start.sensor = SensorTime(block_start_ns);
-    s.start.host = HostTime(host_ns);
-    s.start.mapped = MappedTime(host_ns);  // placeholder, see header
+    s.start.host = HostTime(rx_minus_sensor + block_start_ns);
+    s.start.mapped = MappedTime(s.start.host.ns);  // placeholder, see header
   }
   const std::int64_t offset = t_ns - s.start.sensor.ns;
   if (offset < 0 || offset > std::numeric_limits<std::int32_t>::max()) {

@@ -104,12 +104,14 @@ class HesaiDecoder final : public LidarDecoder {
   // False when the packet is late (dropped).
   bool check_continuity(const PacketView& packet);
   void block_delays(bool dual, std::array<std::int32_t, kMaxBlocks>& delay);
+  // rx_minus_sensor: the packet's receive time less the sensor time its last firing ended
+  // (a point's receive time, back-dated to it, is rx_minus_sensor + its sensor time).
   void add_block(int block, bool dual, std::int32_t delay, std::int64_t packet_ns,
-                 std::int64_t host_ns, const DecoderSinks& sinks);
+                 std::int64_t rx_minus_sensor, const DecoderSinks& sinks);
   void emit(Assembly& a, const DecoderSinks& sinks, bool complete);
   void advance_turn(const DecoderSinks& sinks);
-  void append(Assembly& a, std::int64_t block_start_ns, std::int64_t host_ns, std::int64_t t_ns,
-              float x, float y, float z, float intensity, std::uint16_t ring,
+  void append(Assembly& a, std::int64_t block_start_ns, std::int64_t rx_minus_sensor,
+              std::int64_t t_ns, float x, float y, float z, float intensity, std::uint16_t ring,
               std::uint8_t return_index);
 
   HesaiOptions options_;

@@ -27,6 +27,15 @@ const SensorMetadata& checked(const SensorMetadata& m) {
   return m;
 }
 
+// The timestamp of the packet's last valid column (invalid columns may carry none; the packet
+// holds at least one valid column when this is asked).
+std::uint64_t last_column_timestamp_ns(const LidarPacket& packet) {
+  for (std::uint32_t c = packet.columns(); c-- > 0;) {
+    if (packet.column_valid(c)) return packet.column_timestamp_ns(c);
+  }
+  return 0;
+}
+
 }  // namespace
 
 OusterDecoder::OusterDecoder(SensorMetadata metadata, OusterDecoderOptions options)
@@ -303,8 +312,12 @@ void OusterDecoder::add_columns(const LidarPacket& packet, std::int64_t host_tim
         frame_.have_start = true;
         frame_.start_ts_ns = ts;
         scan_.start.sensor = SensorTime(static_cast<std::int64_t>(ts));
-        scan_.start.host = HostTime(host_time_ns);
-        scan_.start.mapped = MappedTime(host_time_ns);
+        // The packet leaves once its last column is measured: back-dated by the columns from
+        // this one on, its receive time is this column's (a clock fed by scans alone would
+        // otherwise carry a packet of accumulation, 1.5 ms at 1024x10; docs/clocks.md).
+        scan_.start.host = HostTime(
+            host_time_ns - static_cast<std::int64_t>(last_column_timestamp_ns(packet) - ts));
+        scan_.start.mapped = MappedTime(scan_.start.host.ns);
       }
       const std::int64_t offset =
           static_cast<std::int64_t>(ts) - static_cast<std::int64_t>(frame_.start_ts_ns);

@@ -216,7 +216,13 @@ void VelodyneDecoder::on_data_packet(const PacketView& packet, const DecoderSink
     if (begin == end) continue;
     if (scan_.empty()) {
       scan_.start.sensor = SensorTime(packet_ns + returns_[begin].t_offset_ns);
-      scan_.start.host = HostTime(packet.host_time_ns);
+      // The packet leaves when its last firing sequence is done: its receive time, back-dated by
+      // the firings from this point on, is the point's (a clock fed by scans alone would
+      // otherwise carry up to a packet of accumulation, 1.3 ms on a VLP-16, varying with where
+      // the scan was cut; docs/clocks.md).
+      const std::int64_t accumulation =
+          timing.packet_period_ns(r.dual) - returns_[begin].t_offset_ns;
+      scan_.start.host = HostTime(packet.host_time_ns - accumulation);
       scan_.start.mapped = MappedTime(packet.host_time_ns);  // placeholder, see header
     }
     append_block(std::span(returns_).subspan(begin, end - begin), packet_ns);

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -182,6 +183,32 @@ TEST(HesaiDecoder, Pandar40pPointTimesFollowTheFiringTable) {
   EXPECT_EQ(timing.offset_ns(false, 9, 39), timing.offset_ns(false, 9, 3));
   EXPECT_EQ(timing.offset_ns(false, 9, 0) - timing.offset_ns(false, 8, 0), 55'560);
   EXPECT_EQ(timing.offset_ns(true, 9, 0), timing.offset_ns(true, 8, 0));
+}
+
+// A packet leaves once its last round has fired; a scan's receive stamp is back-dated from its
+// packet's to its first point, so that a clock fed by scans alone (docs/clocks.md) sees the link
+// delay only, wherever in its packet the scan was cut. The stream's packets arrive 300 us after
+// their packet time: every scan start then reads 300 us less the last firing's offset from it.
+TEST(HesaiDecoder, ScanStartsAreBackDatedToTheirFirstPoint) {
+  for (const Model model : {Model::kPandarXT32, Model::kPandar40P}) {
+    StreamOptions so;
+    so.model = model;
+    so.sequence = model == Model::kPandarXT32;
+    const Stream s = make_stream(so, 0.55);
+    HesaiOptions o = options_for(model);
+    o.cut_angle_deg = 90.5;  // inside a packet
+    const Result r = run(s, o);
+    ASSERT_GE(r.scans.size(), 6U);
+    const FiringTiming timing(model);
+    const ModelTraits& t = traits(model);
+    std::int32_t last = timing.offset_ns(false, t.blocks - 1, 0);
+    for (int c = 1; c < t.channels; ++c) {
+      last = std::max(last, timing.offset_ns(false, t.blocks - 1, c));
+    }
+    for (const LidarScan& scan : r.scans) {
+      EXPECT_EQ(scan.start.host.ns - scan.start.sensor.ns, 300'000 - last);
+    }
+  }
 }
 
 TEST(HesaiDecoder, AzimuthCutMakesWholeTurns) {

@@ -150,11 +150,16 @@ TEST_F(MovingSensor, ThreeCompleteScans) {
     ++i;
   }
   EXPECT_EQ(k.points, total);
-  // The first scan starts at the first lidar packet (host) and its column 0 (sensor).
+  // The first scan starts at the first lidar packet's column 0 (sensor); its receive time is the
+  // packet's, back-dated from the packet's last column to column 0 (the packet leaves once its
+  // last column is measured).
   const auto first = lidar_indices().front();
   LidarPacket lp;
   ASSERT_EQ(LidarPacket::parse(packets_[first].payload, format_, lp), PacketError::kNone);
-  EXPECT_EQ(c.scans[0].start.host.ns, packets_[first].time_ns);
+  const auto accumulation = static_cast<std::int64_t>(lp.column_timestamp_ns(lp.columns() - 1) -
+                                                      lp.column_timestamp_ns(0));
+  EXPECT_GT(accumulation, 1'000'000);  // 15 columns at 1024x10: 1.46 ms
+  EXPECT_EQ(c.scans[0].start.host.ns, packets_[first].time_ns - accumulation);
   EXPECT_EQ(c.scans[0].start.sensor.ns, static_cast<std::int64_t>(lp.column_timestamp_ns(0)));
 }
 
