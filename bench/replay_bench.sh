@@ -15,7 +15,9 @@
 #                                              XT32' runs only those rows.
 #   bench/replay_bench.sh sweep BUILD_DIR SCENARIO SECONDS RATE 'SETTINGS'...
 #                                              one row per estimator setting (YAML flow mapping,
-#                                              '' = defaults) over SEEDS seeds: mean ATE, p99
+#                                              '' = defaults) over SEEDS seeds: mean ATE (and
+#                                              per seed), p99;
+#                                              SCENARIO is a name or a scenario file
 #
 # BUILD_DIR defaults to build/release (a Release build: -O2, portable, IEEE-exact).
 # Per-frame figures are wall time and CPU time over all threads (unaffected by other processes); run on an
@@ -142,8 +144,10 @@ EOF
     scenario=$3 seconds=$4 rate=$5
     shift 5
     seeds=${SEEDS:-3}
+    # A name is a built-in scenario, a path a scenario file (bench/scenarios/).
+    if [ -f "$scenario" ]; then pick=(--scenario-file "$scenario"); else pick=(--scenario "$scenario"); fi
     for seed in $(seq "$seeds"); do
-      "$livod" sim --scenario "$scenario" --duration "$seconds" --seed "$seed" --scan-rate "$rate" \
+      "$livod" sim "${pick[@]}" --duration "$seconds" --seed "$seed" --scan-rate "$rate" \
         --no-images -o "$work/sim-$seed" > /dev/null
     done
     for settings in "$@"; do
@@ -152,12 +156,13 @@ EOF
         replay_one "$livod" "$work/sim-$seed" "$settings" "$work/out-$seed" >> "$work/rows"
         rm -rf "$work/out-$seed"
       done
-      read -r ate lo hi <<< "$(awk '{print $5}' "$work/rows" | stats)"
+      read -r ate _ _ <<< "$(awk '{print $5}' "$work/rows" | stats)"
       p99=$(awk '{print $3}' "$work/rows" | sort -n | tail -1)
       cpu=$(awk '{print $4}' "$work/rows" | sort -n | tail -1)
       pts=$(awk '{print $1}' "$work/rows" | sort -n | tail -1)
-      printf "%s %s Hz  ATE %s (%s-%s) m  p99 max %s ms (CPU %s)  points %s  %s\n" "$scenario" \
-        "$rate" "$ate" "$lo" "$hi" "$p99" "$cpu" "$pts" "${settings:-defaults}"
+      per_seed=$(awk '{printf "%s%.1f", (NR > 1 ? " / " : ""), 1000 * $5}' "$work/rows")
+      printf "%s %s Hz  ATE %s (%s mm) m  p99 max %s ms (CPU %s)  points %s  %s\n" "$scenario" \
+        "$rate" "$ate" "$per_seed" "$p99" "$cpu" "$pts" "${settings:-defaults}"
     done
     ;;
 

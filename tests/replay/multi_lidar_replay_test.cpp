@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -80,43 +82,53 @@ TEST(MultiLidarReplay, DualMid360RoomIsAtLeastAsAccurateAsTheFrontOneAlone) {
 }
 
 // A roof VLP-16 and a bumper Avia on different clocks, the CAN IMU as the body: the pair against
-// each LiDAR alone on the same recording (12 s, ~80 m; docs/estimator.md "Several LiDARs"). With
-// every LiDAR building the map the pair was, on the plain capture before issue 15, far better
-// than the VLP-16 alone but a little worse than the Avia alone (5.3 against 4.7 mm, and so on five
-// seeds out of five): the VLP-16's rings, 2 deg apart, cut most voxels in single-ring lines, which
-// pass the planarity test as planes whose tilt about the line nothing observes, and its points
-// then match those planes (their residuals were 4x the Avia's in the sectors only the VLP-16
-// sees). With the VLP-16 matched against the map but not building it - the default for a sparse
-// spinning LiDAR beside a denser one since issue 15 - the pair was better than either LiDAR alone
-// on this seed (5.3 against the Avia's 7.1 mm), but on seeds 1-5 only three times in five. Since
-// the scan downsampler keeps a point blind to its noise (stop 30, which the long drives need:
-// docs/estimator.md "Long drives") it is not on any of those seeds (8.4 against 6.5 mm here):
-// issue 10's "the pair at least as accurate as the better LiDAR" is open for this rig
-// (docs/estimator.md "Several LiDARs"). What holds: far better than the VLP-16 alone, and near
-// the Avia.
-TEST(MultiLidarReplay, Vlp16PlusAviaStreetBeatsTheVlp16AndNearsTheAvia) {
+// each LiDAR alone on the same recordings (12 s, ~80 m; docs/estimator.md "Several LiDARs"). Both
+// building the map, the VLP-16's single-ring lines pass the planarity test as planes whose tilt
+// about the line nothing observes, and its points then match those planes: a sparse spinning
+// LiDAR beside a denser one is matched only by default (issue 15). Since then three things set
+// the pair against the Avia alone on seeds 1-5: the scan downsampler's noise-blind point (stop 30:
+// the pair no longer beat the Avia on any seed), the map settings of the LiDAR that builds the
+// map (the VLP-16, the estimator LiDAR, had chosen the pose term for the Avia's map: 12.2 -> 7.5
+// mm mean against the Avia's 7.2), and the VLP-16's clock fed by scans whose receive times carried
+// up to a packet of accumulation (its points 0.1-0.3 ms late against the Avia's: 7.5 -> 6.7 mm).
+// Issue 10: the pair at least as accurate as the better LiDAR - on the mean over the seeds, and
+// within 5 % on each (seed 2: 7.7 against 7.6 mm).
+TEST(MultiLidarReplay, Vlp16PlusAviaStreetIsAtLeastAsAccurateAsTheAvia) {
   const sim::Scenario scenario = sim::make_scenario("street_vehicle_vlp16_avia");
   if (!test::scenario_runnable(scenario)) GTEST_SKIP() << "VLP-16 or Avia not simulated";
-  const auto folder = test::simulate(scenario, 12.0, "vlp16-avia");
-  // The configuration `livod sim` wrote, as is: the VLP-16 matched only by default.
-  const LidarRun pair = replay_with(folder, "vlp16-avia-both");
-  const LidarRun both_build =
-      replay_with(folder, "vlp16-avia-both-build-map", {}, {{"vlp16", "lio: {build_map: true}"}});
-  const LidarRun vlp16 = replay_with(folder, "vlp16-avia-vlp16", {"avia"});
-  const LidarRun avia = replay_with(folder, "vlp16-avia-avia", {"vlp16"});
-  EXPECT_GT(pair.frames, vlp16.frames * 18 / 10);
-  EXPECT_GT(both_build.frames, vlp16.frames * 18 / 10);
-  EXPECT_EQ(pair.summary.counters.scans_late, 0u);
-  EXPECT_EQ(both_build.summary.counters.scans_late, 0u);
-  // The default: far better than the VLP-16 alone, within 1.5x of the Avia alone.
-  EXPECT_LT(pair.ate_m, 0.5 * vlp16.ate_m);
-  EXPECT_LE(pair.ate_m, 1.5 * avia.ate_m);
-  // Both building the map: better than the weaker LiDAR. On the realistic street (issue 15:
-  // moving people and cars, foliage, beam divergence) the VLP-16 alone loses track (27.8 m) and
-  // its map costs the pair more than the 1.5x of the better LiDAR this asserted on the plain
-  // capture (17.4 mm against the Avia's 7.2 mm): why the sparse LiDAR is matched only by default.
-  EXPECT_LE(both_build.ate_m, std::max(vlp16.ate_m, avia.ate_m));
-  EXPECT_LT(both_build.ate_m, 0.04);  // the street target (replay_accuracy_test): 0.05 % of ~80 m
+  double pair_sum = 0.0;
+  double avia_sum = 0.0;
+  constexpr std::uint64_t kSeeds = 5;
+  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    const std::string tag = "vlp16-avia-" + std::to_string(seed);
+    const auto folder = test::simulate(scenario, 12.0, tag, seed);
+    // The configuration `livod sim` wrote, as is: the VLP-16 matched only by default.
+    const LidarRun pair = replay_with(folder, tag + "-both");
+    const LidarRun avia = replay_with(folder, tag + "-avia", {"vlp16"});
+    EXPECT_EQ(pair.summary.counters.scans_late, 0u) << seed;
+    EXPECT_LE(pair.ate_m, 1.05 * avia.ate_m) << seed;
+    pair_sum += pair.ate_m;
+    avia_sum += avia.ate_m;
+    if (seed != 1) continue;
+    // Seed 1: against the VLP-16 alone, and with both building the map.
+    const LidarRun both_build =
+        replay_with(folder, tag + "-both-build-map", {}, {{"vlp16", "lio: {build_map: true}"}});
+    const LidarRun vlp16 = replay_with(folder, tag + "-vlp16", {"avia"});
+    EXPECT_GT(pair.frames, vlp16.frames * 18 / 10);
+    EXPECT_GT(both_build.frames, vlp16.frames * 18 / 10);
+    EXPECT_EQ(both_build.summary.counters.scans_late, 0u);
+    EXPECT_LT(pair.ate_m, 0.5 * vlp16.ate_m);
+    // Both building the map: better than the weaker LiDAR and within the street target
+    // (replay_accuracy_test: 0.05 % of ~80 m); on the realistic street its self-built line
+    // planes cost the pair twice the Avia's error.
+    EXPECT_LE(both_build.ate_m, std::max(vlp16.ate_m, avia.ate_m));
+    EXPECT_LT(both_build.ate_m, 0.04);
+  }
+  std::printf(
+      "[multi-lidar] VLP-16 + Avia street, seeds 1-%llu: mean ATE %.4f m (pair) against "
+      "%.4f m (Avia alone)\n",
+      static_cast<unsigned long long>(kSeeds), pair_sum / kSeeds, avia_sum / kSeeds);
+  EXPECT_LE(pair_sum, avia_sum);
 }
 
 // The corridor with side rooms: the forward Avia sees uniform walls, floor and ceiling, and faces
