@@ -27,11 +27,17 @@ const SensorMetadata& checked(const SensorMetadata& m) {
   return m;
 }
 
-// The timestamp of the packet's last valid column (invalid columns may carry none; the packet
-// holds at least one valid column when this is asked).
-std::uint64_t last_column_timestamp_ns(const LidarPacket& packet) {
+// A packet's columns span at most 16 columns of the slowest mode (512x10: 3.1 ms); a longer or
+// negative span is a corrupt timestamp (counted as a timestamp jump where it is used).
+constexpr std::int64_t kMaxPacketSpanNs = 10'000'000;
+
+// Time from column time `ts` to the packet's last valid column (invalid columns may carry no
+// timestamp): how long the packet waited after `ts` before it could leave; 0 if corrupt.
+std::int64_t accumulation_after_ns(const LidarPacket& packet, std::uint64_t ts) {
   for (std::uint32_t c = packet.columns(); c-- > 0;) {
-    if (packet.column_valid(c)) return packet.column_timestamp_ns(c);
+    if (!packet.column_valid(c)) continue;
+    const auto span = static_cast<std::int64_t>(packet.column_timestamp_ns(c) - ts);
+    return span >= 0 && span <= kMaxPacketSpanNs ? span : 0;
   }
   return 0;
 }
@@ -315,8 +321,7 @@ void OusterDecoder::add_columns(const LidarPacket& packet, std::int64_t host_tim
         // The packet leaves once its last column is measured: back-dated by the columns from
         // this one on, its receive time is this column's (a clock fed by scans alone would
         // otherwise carry a packet of accumulation, 1.5 ms at 1024x10; docs/clocks.md).
-        scan_.start.host = HostTime(
-            host_time_ns - static_cast<std::int64_t>(last_column_timestamp_ns(packet) - ts));
+        scan_.start.host = HostTime(host_time_ns - accumulation_after_ns(packet, ts));
         scan_.start.mapped = MappedTime(scan_.start.host.ns);
       }
       const std::int64_t offset =

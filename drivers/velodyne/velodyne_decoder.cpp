@@ -219,11 +219,14 @@ void VelodyneDecoder::on_data_packet(const PacketView& packet, const DecoderSink
       // The packet leaves when its last firing sequence is done: its receive time, back-dated by
       // the firings from this point on, is the point's (a clock fed by scans alone would
       // otherwise carry up to a packet of accumulation, 1.3 ms on a VLP-16, varying with where
-      // the scan was cut; docs/clocks.md).
+      // the scan was cut; docs/clocks.md). The last block's delay (a field-of-view pause) delays
+      // the packet too.
+      const std::int64_t packet_end_ns = r.last_block_time_ns + timing.packet_period_ns(r.dual) -
+                                         timing.block_reference_ns(r.dual, r.blocks_used - 1);
       const std::int64_t accumulation =
-          timing.packet_period_ns(r.dual) - returns_[begin].t_offset_ns;
+          std::max<std::int64_t>(0, packet_end_ns - returns_[begin].t_offset_ns);
       scan_.start.host = HostTime(packet.host_time_ns - accumulation);
-      scan_.start.mapped = MappedTime(packet.host_time_ns);  // placeholder, see header
+      scan_.start.mapped = MappedTime(scan_.start.host.ns);  // placeholder, see header
     }
     append_block(std::span(returns_).subspan(begin, end - begin), packet_ns);
   }
