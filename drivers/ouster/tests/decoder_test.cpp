@@ -163,6 +163,27 @@ TEST_F(MovingSensor, ThreeCompleteScans) {
   EXPECT_EQ(c.scans[0].start.sensor.ns, static_cast<std::int64_t>(lp.column_timestamp_ns(0)));
 }
 
+// A corrupt timestamp in the packet's last column (zeroed here) must not move the scan's receive
+// time: the span back from it is negative, so nothing is back-dated; the column itself is counted
+// as a timestamp jump.
+TEST_F(MovingSensor, ACorruptLastColumnTimestampBackDatesNothing) {
+  ASSERT_FALSE(format_.lidar_crc);  // the edit would fail the packet's CRC otherwise
+  std::vector<CapturedPacket> packets = packets_;
+  const auto first = lidar_indices().front();
+  std::vector<std::byte>& payload = packets[first].payload;
+  const std::size_t last_column =
+      format_.packet_header_size + (format_.columns_per_packet - 1) * format_.column_size;
+  std::fill_n(payload.begin() + static_cast<std::ptrdiff_t>(last_column), 8, std::byte{0});
+  OusterDecoder decoder(meta_);
+  const Collected c = run(decoder, packets);
+  ASSERT_EQ(c.scans.size(), 3U);
+  EXPECT_EQ(c.scans[0].start.host.ns, packets[first].time_ns);
+  EXPECT_GT(decoder.ouster_counters().timestamp_jumps, 0U);
+  // The other scans are back-dated as usual.
+  EXPECT_LT(c.scans[1].start.host.ns - c.scans[1].start.sensor.ns,
+            c.scans[0].start.host.ns - c.scans[0].start.sensor.ns);
+}
+
 TEST_F(MovingSensor, EveryPointCarriesItsColumnTime) {
   OusterDecoderOptions o;
   o.keep_invalid_points = true;  // fixed layout: point i is column i / 128, row i % 128
