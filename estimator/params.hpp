@@ -105,6 +105,8 @@ struct LidarLioParams {
   std::optional<double> dept_err;       // range noise sigma (m) of this LiDAR's points
   std::optional<double> beam_err_deg;   // bearing noise sigma (deg) of this LiDAR's points
   std::optional<int> point_filter_num;  // one point in n of this LiDAR's (lio/point_filter.hpp)
+  // Association gate of this LiDAR's rows in sigmas (LioParams::sigma_num otherwise).
+  std::optional<double> sigma_num;
   // Its points are inserted into the map. false: they are matched against the planes the other
   // LiDARs build, and build none (a sparse spinning LiDAR cuts a voxel in single-ring lines,
   // which pass the planarity test as planes whose tilt about the line is unobserved).

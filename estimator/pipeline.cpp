@@ -87,6 +87,7 @@ LioPipeline::LioPipeline(PipelineOptions options)
   for (std::size_t l = 0; l < T_imu_lidars_.size(); ++l) {
     noise_[l] = point_noise(options_.params.lio, options_.lidar_lio[l]);
     p2p_->set_lidar_noise(l, noise_[l]);
+    if (options_.lidar_lio[l].sigma_num) p2p_->set_lidar_gate(l, *options_.lidar_lio[l].sigma_num);
   }
   builds_map_all_ = std::all_of(options_.lidar_lio.begin(), options_.lidar_lio.end(),
                                 [](const LidarLioParams& l) { return l.build_map; });

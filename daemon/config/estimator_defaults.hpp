@@ -64,7 +64,8 @@ int estimator_lidar_index(const LivodConfig& config);
 // A sparse spinning LiDAR (sparse_spinning) beside a LiDAR that is not and builds the map is
 // matched only (lio.build_map false) unless its own lio: sets build_map. When the estimator LiDAR
 // is then matched only, how the map is built (lio.map_pose_covariance, lio.min_plane_spread_ratio)
-// follows the first LiDAR that builds it, and its reason says so.
+// follows the first LiDAR that builds it, and its reason says so. A matched-only LiDAR's rows are
+// gated at kMatchedOnlyGateSigmas unless the file sets sigma_num (its lio: or estimator.lio).
 void apply_estimator_defaults(LivodConfig& config);
 
 // Per-scan points the update works on (lio.point_budget) and the raw points per scan the point
@@ -79,6 +80,8 @@ inline constexpr int kDefaultPlanePoints = 500;
 // A spinning LiDAR with fewer rings than this, beside a denser LiDAR that builds the map, is
 // matched only (apply_estimator_defaults; docs/estimator.md "Several LiDARs").
 inline constexpr int kDenseRings = 64;
+// The association gate of a matched-only LiDAR's rows, in sigmas (the map's is lio.sigma_num, 3).
+inline constexpr double kMatchedOnlyGateSigmas = 2.0;
 
 // Spinning LiDARs with fewer rings than this (the VLP-16) see most map voxels in single rings.
 // Their map points carry the pose uncertainty (lio.map_pose_covariance), which keeps those

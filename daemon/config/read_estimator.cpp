@@ -60,7 +60,7 @@ void read_lio(MapReader& m, estimator::LioParams& lio, std::set<std::string>& gi
                    "needs map_pose_covariance: false (it compares a plane's spread with its "
                    "points' noise, and the pose uncertainty in them is not noise)");
   }
-  m.read("sigma_num", lio.sigma_num, left_open(0.0, 10.0));
+  note(m.read("sigma_num", lio.sigma_num, left_open(0.0, 10.0)), "sigma_num");
   m.read("voxel_size", lio.voxel_size, closed(0.05, 10.0));
   m.read("max_layer", lio.max_layer, 0, 4);
   note(m.read("max_points_num", lio.max_points_num, 5, 10000), "max_points_num");

@@ -583,6 +583,8 @@ void read_lidar_lio(MapReader& m, SensorConfig& sensor) {
   int point_filter_num = 1;
   if (m.read("point_filter_num", point_filter_num, 1, 1000))
     lio.point_filter_num = point_filter_num;
+  double sigma_num = 0.0;
+  if (m.read("sigma_num", sigma_num, left_open(0.0, 10.0))) lio.sigma_num = sigma_num;
   sensor.lio_build_map_given = m.read("build_map", lio.build_map);
   m.finish();
 }

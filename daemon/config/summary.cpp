@@ -95,8 +95,8 @@ std::string summarize_config(const LivodConfig& config) {
       out << ", T_body_sensor " << describe_pose(s.T_body_sensor);
     }
     if (s.time_offset_s != 0.0) out << ", time offset " << s.time_offset_s << " s";
-    const bool own_lio =
-        s.lio.dept_err || s.lio.beam_err_deg || s.lio.point_filter_num || !s.lio.build_map;
+    const bool own_lio = s.lio.dept_err || s.lio.beam_err_deg || s.lio.point_filter_num ||
+                         s.lio.sigma_num || !s.lio.build_map;
     if (sensor_kind(s.driver) == SensorKind::lidar && (enabled_lidars > 1 || own_lio)) {
       // Each LiDAR's point model, and where it comes from: its own lio:, its model's defaults or
       // estimator.lio.
@@ -115,6 +115,10 @@ std::string summarize_config(const LivodConfig& config) {
           << (s.lio_from_model.contains("build_map")
                   ? " (" + s.model + " default: sparse rings beside a denser LiDAR)"
                   : "");
+      if (s.lio.sigma_num) {
+        out << ", gate " << *s.lio.sigma_num << " sigma"
+            << (s.lio_from_model.contains("sigma_num") ? " (matched-only default)" : "");
+      }
     }
     out << '\n';
   }

@@ -83,6 +83,7 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
     PointQuery q;
     q.p = R * p_i + x.p_world_imu;
     q.cov = R_wl[l] * points[i].cov_lidar * R_wl[l].transpose();
+    q.gate_sigmas = gate_sigmas_[l];
     const PointNoise& own = noise_[l];  // the point's own LiDAR's
     const bool growth = own.range_limit_m > 0.0 && own.sigma_at_limit_m > 0.0;
     if (incidence_ || growth) {
@@ -113,6 +114,14 @@ void PointToPlane::linearize_block(const std::vector<ScanPoint>& points, const S
     block.abs_residual_sum += std::abs(z);
     ++block.matched;
   }
+}
+
+void PointToPlane::set_lidar_gate(std::size_t lidar, double sigmas) {
+  if (lidar >= T_imu_lidars_.size()) {
+    throw std::invalid_argument("PointToPlane: no LiDAR " + std::to_string(lidar));
+  }
+  if (!(sigmas > 0.0)) throw std::invalid_argument("PointToPlane: a gate must be positive");
+  gate_sigmas_[lidar] = sigmas;
 }
 
 bool PointToPlane::linearize(const std::vector<ScanPoint>& points, const State& x,

@@ -58,6 +58,8 @@ class PointToPlane {
   // Several LiDARs: the noise model of one LiDAR's points (its incidence term), when it differs
   // from the constructor's.
   void set_lidar_noise(std::size_t lidar, const PointNoise& noise);
+  // The association gate (in sigmas) of LiDAR `lidar`'s rows instead of the map's sigma_num.
+  void set_lidar_gate(std::size_t lidar, double sigmas);
 
   // Accumulates the normal equations of every matched point at state x.
   bool linearize(const std::vector<ScanPoint>& points, const State& x, NormalEquations& eq,
@@ -85,7 +87,8 @@ class PointToPlane {
   const VoxelMap& map_;
   std::vector<Eigen::Isometry3d> T_imu_lidars_;
   TaskRunner* runner_;
-  std::array<PointNoise, kMaxLidars> noise_;  // per LiDAR
+  std::array<PointNoise, kMaxLidars> noise_;      // per LiDAR
+  std::array<double, kMaxLidars> gate_sigmas_{};  // per LiDAR; 0: the map's sigma_num
   bool incidence_;
   std::vector<Eigen::Vector3d> normals_;
   std::vector<Block> blocks_;

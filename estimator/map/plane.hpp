@@ -120,6 +120,8 @@ struct PointQuery {
   // depends on the plane's incidence, is added per candidate plane.
   double range_q2 = 0.0;
   double var_at_limit = 0.0;
+  // The association gate in sigmas for this point's LiDAR; 0: the map's (LioParams::sigma_num).
+  double gate_sigmas = 0.0;
 };
 // The incidence-dependent variance along `normal`: (r sigma_b tan(alpha))^2 cos^2(alpha), and the
 // range noise growth beyond its head-on value, times cos^2(alpha); alpha clamped to the largest

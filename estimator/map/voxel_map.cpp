@@ -202,7 +202,8 @@ struct VoxelMap::Node {
       const double along = (p - plane.center).squaredNorm() - distance * distance;
       if (along > plane.extent2) return;
       const PlaneResidual r = plane_residual(plane, q);
-      if (!(r.variance > 0.0) || r.distance * r.distance >= sigma_num * sigma_num * r.variance) {
+      const double gate = q.gate_sigmas > 0.0 ? q.gate_sigmas : sigma_num;
+      if (!(r.variance > 0.0) || r.distance * r.distance >= gate * gate * r.variance) {
         return;
       }
       // Most points have one candidate: the likelihoods are only needed to choose between two.

@@ -148,6 +148,58 @@ TEST(PointToPlane, EachLidarsPointsUseItsOwnNoise) {
   EXPECT_THROW(pair.set_lidar_noise(2, coarse), std::invalid_argument);
 }
 
+// Several LiDARs: each LiDAR's rows may have their own association gate (set_lidar_gate; a
+// matched-only LiDAR's default is 2 sigma). Points 0-4 sigma off their planes: LiDAR 1's rows at 2
+// sigma in a pair are those of one LiDAR over a map whose sigma_num is 2, and fewer than at the
+// map's 3.
+TEST(PointToPlane, EachLidarsRowsUseItsOwnGate) {
+  std::mt19937 rng(12);
+  LioParams lio;  // sigma_num 3
+  LioParams tight = lio;
+  tight.sigma_num = 2.0;
+  const std::vector<CovPoint> room = floor_and_walls(rng, 60000);
+  VoxelMap map(lio, MapParams{});
+  map.insert(room);
+  VoxelMap tight_map(tight, MapParams{});
+  tight_map.insert(room);
+  State x;
+  x.R_world_imu = so3::exp(Eigen::Vector3d(0.01, -0.02, 0.2));
+  x.p_world_imu = Eigen::Vector3d(0.3, -0.2, 1.1);
+  Eigen::Isometry3d T1 = Eigen::Isometry3d::Identity();
+  T1.linear() = so3::exp(Eigen::Vector3d(0.0, 0.3, 3.0));
+  T1.translation() = Eigen::Vector3d(-0.4, 0.1, 0.05);
+  std::uniform_real_distribution<double> off(0.0, 0.04);  // 0-4 sigma of 1 cm
+  std::vector<ScanPoint> scan;
+  int i = 0;
+  for (CovPoint w : floor_and_walls(rng, 3000)) {
+    const int which = i++ % 3;  // floor, wall x = 4, wall y = 4 (floor_and_walls' order)
+    w.p[which == 0 ? 2 : which == 1 ? 0 : 1] += which == 0 ? off(rng) : -off(rng);
+    ScanPoint sp;
+    const Eigen::Vector3d p_imu = x.R_world_imu.transpose() * (w.p - x.p_world_imu);
+    sp.p_lidar = T1.inverse() * p_imu;
+    sp.cov_lidar = Eigen::Matrix3d::Identity() * 1e-4;
+    sp.lidar = 1;
+    scan.push_back(sp);
+  }
+  std::vector<ScanPoint> alone_scan = scan;
+  for (auto& sp : alone_scan) sp.lidar = 0;
+  const std::vector<Eigen::Isometry3d> extrinsics{Eigen::Isometry3d::Identity(), T1};
+  PointToPlane gated(map, extrinsics, nullptr);
+  gated.set_lidar_gate(1, 2.0);
+  PointToPlane ungated(map, extrinsics, nullptr);
+  PointToPlane alone_tight(tight_map, T1, nullptr);
+  NormalEquations eq_gated, eq_ungated, eq_alone;
+  ASSERT_TRUE(gated.linearize(scan, x, eq_gated, 50));
+  ASSERT_TRUE(ungated.linearize(scan, x, eq_ungated, 50));
+  ASSERT_TRUE(alone_tight.linearize(alone_scan, x, eq_alone, 50));
+  EXPECT_EQ(eq_gated.measurements, eq_alone.measurements);
+  EXPECT_LT((eq_gated.HtRinvH - eq_alone.HtRinvH).norm(), 1e-9 * eq_alone.HtRinvH.norm());
+  // About a quarter of the points lie 2-3 sigma off: the 3-sigma gate keeps them.
+  EXPECT_GT(eq_ungated.measurements, eq_gated.measurements + 400);
+  EXPECT_THROW(gated.set_lidar_gate(2, 2.0), std::invalid_argument);
+  EXPECT_THROW(gated.set_lidar_gate(1, 0.0), std::invalid_argument);
+}
+
 TEST(PointToPlane, DegeneracyFlagsACorridor) {
   // Information from two parallel walls and a floor: nothing constrains x.
   StateMatrix info = StateMatrix::Zero();

@@ -90,9 +90,10 @@ TEST(MultiLidarReplay, DualMid360RoomIsAtLeastAsAccurateAsTheFrontOneAlone) {
 // the pair no longer beat the Avia on any seed), the map settings of the LiDAR that builds the
 // map (the VLP-16, the estimator LiDAR, had chosen the pose term for the Avia's map: 12.2 -> 7.5
 // mm mean against the Avia's 7.2), and the VLP-16's clock fed by scans whose receive times carried
-// up to a packet of accumulation (its points 0.1-0.3 ms late against the Avia's: 7.5 -> 6.7 mm).
-// Issue 10: the pair at least as accurate as the better LiDAR - on the mean over the seeds, and
-// within 5 % on each (seed 2: 7.7 against 7.6 mm).
+// up to a packet of accumulation (its points 0.1-0.3 ms late against the Avia's: 7.5 -> 6.7 mm),
+// and then the matched-only VLP-16's rows gated at 2 sigma instead of 3 (6.7 -> 5.2 mm; seed 2
+// was 1.3 % over the Avia before). Issue 10: the pair at least as accurate as the better LiDAR,
+// on every seed.
 TEST(MultiLidarReplay, Vlp16PlusAviaStreetIsAtLeastAsAccurateAsTheAvia) {
   const sim::Scenario scenario = sim::make_scenario("street_vehicle_vlp16_avia");
   if (!test::scenario_runnable(scenario)) GTEST_SKIP() << "VLP-16 or Avia not simulated";
@@ -106,7 +107,7 @@ TEST(MultiLidarReplay, Vlp16PlusAviaStreetIsAtLeastAsAccurateAsTheAvia) {
     const LidarRun pair = replay_with(folder, tag + "-both");
     const LidarRun avia = replay_with(folder, tag + "-avia", {"vlp16"});
     EXPECT_EQ(pair.summary.counters.scans_late, 0u) << seed;
-    EXPECT_LE(pair.ate_m, 1.05 * avia.ate_m) << seed;
+    EXPECT_LE(pair.ate_m, avia.ate_m) << seed;
     pair_sum += pair.ate_m;
     avia_sum += avia.ate_m;
     if (seed != 1) continue;

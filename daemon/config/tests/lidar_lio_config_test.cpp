@@ -214,6 +214,40 @@ TEST(LidarLioConfig, TheMapSettingsFollowTheLidarThatBuildsTheMap) {
   EXPECT_EQ(choice(told.config, "lio.map_pose_covariance").reason, "set in the configuration");
 }
 
+// A matched-only LiDAR's rows are gated at 2 sigma (the map's gate is 3): the VLP-16 beside the
+// Avia by default, any LiDAR told build_map: false too; a sigma_num of the file wins (its own
+// lio: or estimator.lio), and a LiDAR that builds the map keeps the map's gate.
+TEST(LidarLioConfig, AMatchedOnlyLidarIsGatedTighter) {
+  const auto pair = load(two_lidars(""));
+  ASSERT_TRUE(pair.problems.empty()) << dump(pair);
+  const SensorConfig& vlp16 = pair.config.sensors.at(0);
+  ASSERT_TRUE(vlp16.lio.sigma_num.has_value());
+  EXPECT_DOUBLE_EQ(*vlp16.lio.sigma_num, kMatchedOnlyGateSigmas);
+  EXPECT_TRUE(vlp16.lio_from_model.contains("sigma_num"));
+  EXPECT_FALSE(pair.config.sensors.at(1).lio.sigma_num.has_value());
+  EXPECT_NE(summarize_config(pair.config).find("gate 2 sigma (matched-only default)"),
+            std::string::npos);
+
+  const auto avia_told = load(two_lidars("", "    lio: {build_map: false}\n"));
+  ASSERT_TRUE(avia_told.problems.empty()) << dump(avia_told);
+  // The VLP-16 builds the map then (no denser LiDAR does); the Avia is matched only.
+  EXPECT_FALSE(avia_told.config.sensors.at(0).lio.sigma_num.has_value());
+  ASSERT_TRUE(avia_told.config.sensors.at(1).lio.sigma_num.has_value());
+  EXPECT_DOUBLE_EQ(*avia_told.config.sensors.at(1).lio.sigma_num, kMatchedOnlyGateSigmas);
+
+  const auto own = load(two_lidars("    lio: {sigma_num: 2.5}\n"));
+  ASSERT_TRUE(own.problems.empty()) << dump(own);
+  EXPECT_DOUBLE_EQ(*own.config.sensors.at(0).lio.sigma_num, 2.5);
+  EXPECT_FALSE(own.config.sensors.at(0).lio_from_model.contains("sigma_num"));
+
+  const auto estimator = load(two_lidars("", "", "", "estimator: {lio: {sigma_num: 3}}\n"));
+  ASSERT_TRUE(estimator.problems.empty()) << dump(estimator);
+  EXPECT_FALSE(estimator.config.sensors.at(0).lio.sigma_num.has_value());
+
+  const auto bad = load_config_from_string(two_lidars("    lio: {sigma_num: 0}\n"), "test.yaml");
+  EXPECT_FALSE(bad.problems.empty());
+}
+
 // Inserting scans from new viewpoints only (lio.map_min_move_m) skips whole groups, and with
 // several LiDARs a group holds parts of each one's scans: the VLP-16's default is dropped beside
 // another LiDAR (said so), and a file that sets it with two LiDARs is refused.
