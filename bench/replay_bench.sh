@@ -91,6 +91,12 @@ replay_one() {
   echo "$(figures "$out") $ate"
 }
 
+# The `livod sim` option that names scenario $1: a built-in scenario's name, or a scenario file's
+# path (bench/scenarios/).
+scenario_flag() {
+  if [ -f "$1" ]; then echo --scenario-file; else echo --scenario; fi
+}
+
 # median over the rows of $work/rows of column $1 ($2 rows)
 median_of() {
   sort -n -k"$1" "$work/rows" | awk -v c="$1" -v n="$2" 'NR == int((n + 1) / 2) {print $c}'
@@ -114,9 +120,7 @@ case "$mode" in
           : > "$work/rows"
           for seed in $(seq "$seeds"); do
             sim="$work/$(basename "$scenario" .yaml)-$rate-$seed"
-            # A name is a built-in scenario, a path a scenario file (bench/scenarios/).
-            if [ -f "$scenario" ]; then pick=(--scenario-file "$scenario"); else pick=(--scenario "$scenario"); fi
-            [ -d "$sim" ] || "$livod" sim "${pick[@]}" --duration "$seconds" \
+            [ -d "$sim" ] || "$livod" sim "$(scenario_flag "$scenario")" "$scenario" --duration "$seconds" \
               --seed "$seed" --scan-rate "$rate" --no-images -o "$sim" > /dev/null
             replay_one "$bin" "$sim" "" "$sim-$build" >> "$work/rows"
             rm -rf "$sim-$build"
@@ -144,10 +148,8 @@ EOF
     scenario=$3 seconds=$4 rate=$5
     shift 5
     seeds=${SEEDS:-3}
-    # A name is a built-in scenario, a path a scenario file (bench/scenarios/).
-    if [ -f "$scenario" ]; then pick=(--scenario-file "$scenario"); else pick=(--scenario "$scenario"); fi
     for seed in $(seq "$seeds"); do
-      "$livod" sim "${pick[@]}" --duration "$seconds" --seed "$seed" --scan-rate "$rate" \
+      "$livod" sim "$(scenario_flag "$scenario")" "$scenario" --duration "$seconds" --seed "$seed" --scan-rate "$rate" \
         --no-images -o "$work/sim-$seed" > /dev/null
     done
     for settings in "$@"; do

@@ -32,6 +32,7 @@ FiringTiming::FiringTiming(Model model) {
       // Rounds before the packet's last one (block pairs share a round in dual return).
       const int rounds_before_last = (t.blocks - 1 - b) / returns;
       std::int32_t earliest = 0;
+      std::int32_t latest = 0;
       for (int c = 0; c < t.channels; ++c) {
         std::int32_t offset = 0;
         if (model == Model::kPandarXT32) {
@@ -43,8 +44,10 @@ FiringTiming::FiringTiming(Model model) {
         }
         table[static_cast<std::size_t>(b * kMaxChannels + c)] = offset;
         earliest = c == 0 ? offset : std::min(earliest, offset);
+        latest = c == 0 ? offset : std::max(latest, offset);
       }
       start[static_cast<std::size_t>(b)] = earliest;
+      if (b == t.blocks - 1) last_firing_[static_cast<std::size_t>(mode)] = latest;
     }
     period_ns_[static_cast<std::size_t>(mode)] =
         std::llround(t.firing_round_ns * t.blocks / returns);

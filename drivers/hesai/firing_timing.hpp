@@ -31,12 +31,15 @@ class FiringTiming {
   [[nodiscard]] std::int32_t block_start_ns(bool dual, int block) const {
     return start_[dual ? 1 : 0][static_cast<std::size_t>(block)];
   }
+  // The packet's last firing (the latest channel of its last block): the packet leaves after it.
+  [[nodiscard]] std::int32_t last_firing_ns(bool dual) const { return last_firing_[dual ? 1 : 0]; }
   // Time one packet's rounds take (the nominal time between packets).
   [[nodiscard]] std::int64_t packet_period_ns(bool dual) const { return period_ns_[dual ? 1 : 0]; }
 
  private:
   std::array<std::array<std::int32_t, kMaxBlocks * kMaxChannels>, 2> table_{};
   std::array<std::array<std::int32_t, kMaxBlocks>, 2> start_{};
+  std::array<std::int32_t, 2> last_firing_{};
   std::array<std::int64_t, 2> period_ns_{};
 };
 

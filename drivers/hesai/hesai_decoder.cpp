@@ -83,11 +83,8 @@ void HesaiDecoder::on_packet(const PacketView& packet, const DecoderSinks& sinks
   // The packet leaves once its last round has fired: a point's receive time is the packet's less
   // the time from the point to then (a clock fed by scans alone would otherwise carry up to a
   // packet of accumulation, varying with where the scan was cut; docs/clocks.md).
-  std::int32_t last_firing_ns = timing_.offset_ns(dual, traits_.blocks - 1, 0);
-  for (int c = 1; c < traits_.channels; ++c) {
-    last_firing_ns = std::max(last_firing_ns, timing_.offset_ns(dual, traits_.blocks - 1, c));
-  }
-  const std::int64_t rx_minus_sensor = packet.host_time_ns - packet_.timestamp_ns - last_firing_ns;
+  const std::int64_t rx_minus_sensor =
+      packet.host_time_ns - packet_.timestamp_ns - timing_.last_firing_ns(dual);
   for (int b = 0; b < traits_.blocks; ++b) {
     add_block(b, dual, delay[static_cast<std::size_t>(b)], packet_.timestamp_ns, rx_minus_sensor,
               sinks);
