@@ -145,7 +145,9 @@ struct PipelineCounters {
   std::uint64_t imu_queue_overflow = 0;
   std::uint64_t frames_without_update = 0;
   std::uint64_t degenerate_frames = 0;
-  std::uint64_t scans_not_mapped = 0;  // no new viewpoint (lio.map_min_move_m): not inserted
+  // Groups whose points (of one LiDAR at least) were held back: no new viewpoint
+  // (lio.map_min_move_m).
+  std::uint64_t scans_not_mapped = 0;
   std::uint64_t images_in = 0;
   // No camera configured, VIO disabled, before the IMU initialisation or the first scan's end.
   std::uint64_t images_unused = 0;
@@ -230,7 +232,6 @@ class LioPipeline {
   std::unique_ptr<VoxelMap> map_;
   std::unique_ptr<PointToPlane> p2p_;
   std::array<PointNoise, kMaxLidars> noise_{};  // each LiDAR's point noise model
-  bool builds_map_all_ = true;                  // every LiDAR's points go into the map
   std::vector<CovPoint> map_points_;            // the points that do (when not all LiDARs build)
   VoxelGridDownsampler downsampler_;
   std::optional<PointBudget> point_budget_;
@@ -266,9 +267,11 @@ class LioPipeline {
   std::unique_ptr<vio::VioProcessor> vio_;
   std::vector<Eigen::Vector3d> scan_world_;  // the scan in the world after the LIO update
   std::vector<Eigen::Vector3d> no_normals_;
-  MapInsertGate map_gate_;         // which scans go into the map (lio.map_min_move_m)
+  // Which sweeps go into the map (lio.map_min_move_m): one gate per LiDAR, each admitting a scan
+  // period of its own points, since the LiDARs' sweeps begin at different times.
+  std::vector<MapInsertGate> map_gates_;
+  std::array<Nanoseconds, kMaxLidars> scan_periods_{};  // each LiDAR's newest scan span
   vio::RecentSweep recent_sweep_;  // what the visual update looks at: a whole sweep
-  Nanoseconds scan_period_{0};     // the span of the newest scan
   std::vector<std::uint32_t> colors_;
   std::vector<std::uint8_t> colored_;
   std::uint64_t images_unused_ = 0;

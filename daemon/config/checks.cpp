@@ -429,15 +429,6 @@ void check_implemented(ProblemList& problems, const LivodConfig& config,
                              "visual update runs with one LiDAR only (disable one LiDAR, or set " +
                              "estimator.vio.enabled: false to fuse both LiDAR-inertially)");
         }
-        if (static_cast<int>(i) != first_lidar &&
-            config.estimator_given.contains("lio.map_min_move_m") &&
-            config.estimator.lio.map_min_move_m > 0.0) {
-          // The gate admits one LiDAR's sweeps; with several, a group holds parts of each one's.
-          problems.error(ProblemKind::not_implemented, sites[i].path + ".enabled", sites[i].at,
-                         both_lidars() + " with estimator.lio.map_min_move_m set: inserting " +
-                             "scans from new viewpoints only works with one LiDAR (remove " +
-                             "map_min_move_m, or disable one LiDAR)");
-        }
         break;
       }
       case SensorKind::imu:

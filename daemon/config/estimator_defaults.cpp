@@ -99,7 +99,10 @@ void follow_the_map_builder(LivodConfig& config, int lidar,
         config.estimator.lio.map_pose_covariance = builder.lio.map_pose_covariance;
       } else if (from.key == "lio.min_plane_spread_ratio") {
         config.estimator.lio.min_plane_spread_ratio = builder.lio.min_plane_spread_ratio;
-      } else {  // the point model is per LiDAR; the viewpoint gate takes one LiDAR (below)
+      } else if (from.key == "lio.map_min_move_m") {
+        // The gate holds back scans of the LiDARs that build the map: theirs is the view.
+        config.estimator.lio.map_min_move_m = builder.lio.map_min_move_m;
+      } else {  // the point model is per LiDAR
         continue;
       }
       for (EstimatorChoice& c : config.estimator_choices) {
@@ -330,21 +333,6 @@ void apply_estimator_defaults(LivodConfig& config) {
   match_sparse_beside_dense(config);
   follow_the_map_builder(config, lidar, file_values);
   gate_matched_only(config);
-  // The viewpoint gate takes whole scans of one LiDAR (estimator/map/insert_gate.hpp); with
-  // several, every group goes into the map. A file that sets it with several LiDARs is rejected
-  // (checks.cpp).
-  const auto lidars = std::count_if(config.sensors.begin(), config.sensors.end(),
-                                    [](const SensorConfig& s) { return enabled_lidar(s); });
-  if (lidars > 1 && !config.estimator_given.contains("lio.map_min_move_m") &&
-      config.estimator.lio.map_min_move_m > 0.0) {
-    config.estimator.lio.map_min_move_m = 0.0;
-    for (EstimatorChoice& c : config.estimator_choices) {
-      if (c.key != "lio.map_min_move_m") continue;
-      c.value = number(0.0);
-      c.reason = std::to_string(lidars) +
-                 " LiDARs: every scan goes into the map (the viewpoint gate takes one LiDAR)";
-    }
-  }
 }
 
 }  // namespace livod::daemon

@@ -13,7 +13,9 @@
 // The decision is per sweep, not per measurement group: with a camera faster than the LiDAR a
 // group holds part of a scan, and every group ending within a scan period (plus a tenth, for the
 // jitter of image times) of the admitted group's start is admitted with it, so that a sweep goes
-// in whole or not at all.
+// in whole or not at all. With several LiDARs each has its own gate (LioPipeline): their sweeps
+// begin at different times, and a group holds parts of each one's; a LiDAR's gate admits a scan
+// period of its points, from wherever the admitted group begins.
 
 #include <Eigen/Core>
 

@@ -248,36 +248,40 @@ TEST(LidarLioConfig, AMatchedOnlyLidarIsGatedTighter) {
   EXPECT_FALSE(bad.problems.empty());
 }
 
-// Inserting scans from new viewpoints only (lio.map_min_move_m) skips whole groups, and with
-// several LiDARs a group holds parts of each one's scans: the VLP-16's default is dropped beside
-// another LiDAR (said so), and a file that sets it with two LiDARs is refused.
-TEST(LidarLioConfig, ViewpointGateTakesOneLidar) {
+// Inserting scans from new viewpoints only (lio.map_min_move_m) follows the LiDARs that build the
+// map: beside the Avia the matched-only VLP-16's gate is dropped (the Avia's view builds the map,
+// and an Avia inserts every scan), the VLP-16 building the map keeps its own, and a value of the
+// file is taken with several LiDARs too (each LiDAR has its own gate in the estimator).
+TEST(LidarLioConfig, TheViewpointGateFollowsTheLidarsThatBuildTheMap) {
+  const auto choice = [](const LivodConfig& c) {
+    const auto it = std::find_if(c.estimator_choices.begin(), c.estimator_choices.end(),
+                                 [](const auto& e) { return e.key == "lio.map_min_move_m"; });
+    return it == c.estimator_choices.end() ? EstimatorChoice{} : *it;
+  };
   const auto pair = load(two_lidars(""));
   ASSERT_TRUE(pair.problems.empty()) << dump(pair);
   EXPECT_DOUBLE_EQ(pair.config.estimator.lio.map_min_move_m, 0.0);
-  const auto c =
-      std::find_if(pair.config.estimator_choices.begin(), pair.config.estimator_choices.end(),
-                   [](const auto& e) { return e.key == "lio.map_min_move_m"; });
-  ASSERT_NE(c, pair.config.estimator_choices.end());
-  EXPECT_EQ(c->value, "0");
-  EXPECT_NE(c->reason.find("2 LiDARs"), std::string::npos) << c->reason;
-  // The Avia disabled: the VLP-16 alone keeps its gate.
-  const auto alone = load(two_lidars("", "    enabled: false\n"));
-  ASSERT_TRUE(alone.problems.empty()) << dump(alone);
-  EXPECT_GT(alone.config.estimator.lio.map_min_move_m, 0.0);
+  EXPECT_EQ(choice(pair.config).value, "0");
+  EXPECT_NE(choice(pair.config).reason.find("(avia builds the map; vlp16 is matched only)"),
+            std::string::npos)
+      << choice(pair.config).reason;
 
-  const std::string set = two_lidars("", "", "", "estimator: {lio: {map_min_move_m: 0.5}}\n");
-  const auto refused = load_config_from_string(set, "test.yaml");
-  const ConfigProblem* p =
-      test::find_problem(refused, ProblemKind::not_implemented, "sensors[1].enabled");
-  ASSERT_NE(p, nullptr) << dump(refused);
-  EXPECT_NE(p->message.find("map_min_move_m"), std::string::npos) << p->message;
-  // One LiDAR: accepted.
-  const auto one = load_config_from_string(
-      two_lidars("", "    enabled: false\n", "", "estimator: {lio: {map_min_move_m: 0.5}}\n"),
-      "test.yaml");
-  EXPECT_EQ(test::find_problem(one, ProblemKind::not_implemented, "sensors[1].enabled"), nullptr)
-      << dump(one);
+  // The VLP-16 building the map, beside the Avia or alone: its 16 rings' gate.
+  const std::pair<std::string, std::string> builds_own_map[] = {
+      {"    lio: {build_map: true}\n", ""}, {"", "    enabled: false\n"}};
+  for (const auto& [vlp16, avia] : builds_own_map) {
+    const auto own = load(two_lidars(vlp16, avia));
+    ASSERT_TRUE(own.problems.empty()) << dump(own);
+    EXPECT_DOUBLE_EQ(own.config.estimator.lio.map_min_move_m, kViewpointMoveM) << vlp16 << avia;
+    EXPECT_NE(choice(own.config).reason.find("VLP-16's 16 rings"), std::string::npos);
+  }
+
+  // Set in the file with two enabled LiDARs: taken, no problem.
+  const auto set = load_config_from_string(
+      two_lidars("", "", "", "estimator: {lio: {map_min_move_m: 0.25}}\n"), "test.yaml");
+  EXPECT_TRUE(set.problems.empty()) << dump(set);
+  EXPECT_DOUBLE_EQ(set.config.estimator.lio.map_min_move_m, 0.25);
+  EXPECT_EQ(choice(set.config).reason, "set in the configuration");
 }
 
 }  // namespace
