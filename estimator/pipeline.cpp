@@ -406,7 +406,7 @@ void LioPipeline::process_group(const MeasurementGroup& group,
     // when their scans are not synchronised. Scans cut at the same time (phase-locked spinning
     // LiDARs, PTP-synchronised Livox) give a group of whole scans and a group of a few points
     // instead: the count is taken per period / n, and a group much shorter than that is not
-    // counted, or the cell would follow the few points down and the next whole scans keep 4x
+    // counted, or the cell would follow the few points down and the next whole scans take 4.5x
     // the budget (two phase-locked VLP-16s: 36 000 points, 110 ms p99).
     const Nanoseconds share = scan_periods_[0] / static_cast<std::int64_t>(T_imu_lidars_.size());
     const Nanoseconds span = group.t_update - t_begin;
