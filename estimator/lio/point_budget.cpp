@@ -30,4 +30,9 @@ bool PointBudget::observe(std::size_t points) {
   return ratio > kRedoFactor && step_ > previous;
 }
 
+void PointBudget::observe_part(std::size_t points, double fraction) {
+  if (!(fraction >= kMinFraction)) return;
+  observe(static_cast<std::size_t>(std::lround(static_cast<double>(points) / fraction)));
+}
+
 }  // namespace livod::estimator

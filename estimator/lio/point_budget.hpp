@@ -32,10 +32,16 @@ class PointBudget {
   // overshot so far (more than kRedoFactor x budget with room to grow) that it should be
   // downsampled again with the new cell().
   bool observe(std::size_t points);
+  // Several LiDARs: an update kept `points` over `fraction` of the span the budget is for (its
+  // time over a scan period / n). The count is scaled to that span; an update shorter than
+  // kMinFraction is not counted (scans that end together leave one of a few points, which would
+  // shrink the cell for the next update's whole scans).
+  void observe_part(std::size_t points, double fraction);
 
   [[nodiscard]] int budget() const { return budget_; }
 
   static constexpr double kRedoFactor = 1.5;
+  static constexpr double kMinFraction = 0.25;
   // Steps of the cell ladder per doubling of the cell.
   static constexpr int kStepsPerOctave = 8;
 

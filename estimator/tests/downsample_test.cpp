@@ -252,6 +252,22 @@ TEST(PointBudget, AskForARedoOnlyWhenFarOverAndAbleToGrow) {
 
 // The cell is always a step of the ladder min x 2^(k/8), and counts that differ by a few points
 // (another container, another scan cut) give the same cell.
+// Several LiDARs: an update's count is scaled to the budget's span, and an update under a quarter
+// of it (the few points after scans that ended together) leaves the cell alone.
+TEST(PointBudget, PartsAreScaledToTheBudgetsSpanAndSliversIgnored) {
+  PointBudget whole(1000, 0.1, 1.0);
+  PointBudget part(1000, 0.1, 1.0);
+  whole.observe(4000);
+  part.observe_part(8000, 2.0);  // two spans' worth: the same count per span
+  EXPECT_DOUBLE_EQ(part.cell(), whole.cell());
+  EXPECT_GT(part.cell(), 0.1);
+  const double cell = part.cell();
+  part.observe_part(3, 0.001);  // a sliver: not counted
+  EXPECT_DOUBLE_EQ(part.cell(), cell);
+  part.observe_part(10, 0.3);  // short but counted: 33 per span, far under the budget
+  EXPECT_LT(part.cell(), cell);
+}
+
 TEST(PointBudget, CellStaysOnTheLadderSoNearbyCountsGiveTheSameCell) {
   PointBudget a(8000, 0.1, 0.5);
   PointBudget b(8000, 0.1, 0.5);
